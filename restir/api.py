@@ -1,0 +1,123 @@
+"""Python API: load a scene, render it with a method, get numpy images and stats back.
+
+    import restir
+    scene = restir.load_scene("builtin:cornell-box")
+    result = restir.render(scene, restir.RenderConfig(method="pt", spp=64))
+    result.image        # (H, W, 3) float32, linear RGB, mean over frames
+    result.stats        # per-stage ms, rays/s, bytes per pixel, ...
+"""
+import copy
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import ConfigError, RenderConfig, method_settings
+from .scene.builtin import builtin_scene
+from .scene.errors import SceneError
+from .scene.scene import Scene, build_scene
+from .scene.upload import DeviceScene
+from .scene.xml_loader import load_xml
+
+
+def load_scene(spec: str, defines: dict[str, str] | None = None, **builtin_args) -> Scene:
+    """`builtin:NAME` (keyword arguments go to the builtin) or a Mitsuba 3 XML file path."""
+    if spec.startswith("builtin:"):
+        name = spec.split(":", 1)[1]
+        if defines:
+            raise SceneError("-D defines apply to XML scenes only", spec)
+        return build_scene(builtin_scene(name, **builtin_args), name)
+    return build_scene(load_xml(spec, defines), spec)
+
+
+@dataclass
+class RenderResult:
+    image: np.ndarray       # (H, W, 3) mean of all samples
+    m2: np.ndarray          # (H, W, 3) mean of squared samples (per-sample variance = m2 - image^2)
+    samples: int            # samples per pixel in total (spp * frames)
+    stats: dict
+
+    @property
+    def variance_of_mean(self) -> np.ndarray:
+        n = self.samples
+        return np.maximum(self.m2 - self.image.astype(np.float64) ** 2, 0.0) * n / max(n - 1, 1) / n
+
+
+def _init_warp():
+    import warp as wp
+
+    wp.init()
+    return wp
+
+
+def make_integrator(scene: Scene, config: RenderConfig):
+    from .integrators import METHODS
+
+    if config.method not in METHODS:
+        raise ConfigError(f"unknown method '{config.method}' (available: {', '.join(METHODS)})")
+    cls = METHODS[config.method]
+    settings = method_settings(cls.SETTINGS, config.settings)
+    settings.update(seed=config.seed, spp=config.spp or scene.spp,
+                    max_depth=config.max_depth if config.max_depth is not None else scene.max_depth,
+                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
+    if hasattr(cls, "check_settings"):
+        cls.check_settings(settings)
+    dscene = DeviceScene(scene, config.device)
+    return cls(dscene, settings, config.device, config.slices)
+
+
+def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> RenderResult:
+    """Render `config.frames` frames and return their average with stats.
+
+    `progress`, if given, is called as progress(frames_done, frames_total) after each frame.
+    """
+    config = config or RenderConfig()
+    config.validate()
+    wp = _init_warp()
+    try:
+        wp.get_device(config.device)
+    except Exception:
+        raise ConfigError(f"device '{config.device}' is not available") from None
+    if config.width or config.height:
+        scene = copy.copy(scene)
+        scene.camera = copy.copy(scene.camera)
+        scene.camera.width = config.width or scene.camera.width
+        scene.camera.height = config.height or scene.camera.height
+    t_setup = time.perf_counter()
+    integ = make_integrator(scene, config)
+    setup_ms = (time.perf_counter() - t_setup) * 1e3
+    h, w = integ.height, integ.width
+    acc = np.zeros((h, w, 3))
+    acc2 = np.zeros((h, w, 3))
+    t0 = time.perf_counter()
+    for f in range(config.frames):
+        mean, m2 = integ.render_frame(f)
+        acc += mean
+        acc2 += m2
+        if progress:
+            progress(f + 1, config.frames)
+    total_ms = (time.perf_counter() - t0) * 1e3
+    stage_ms = sum(v for v in integ.timer.ms.values())
+    spp = integ.settings["spp"]
+    stats = {
+        "scene": scene.name,
+        "method": config.method,
+        "device": str(integ.device),
+        "width": w,
+        "height": h,
+        "spp_per_frame": spp,
+        "frames": config.frames,
+        "max_depth": integ.settings["max_depth"],
+        "settings": {k: v for k, v in integ.settings.items()},
+        "stages": integ.timer.summary(),
+        "stage_total_ms": stage_ms,
+        "total_ms": total_ms,
+        "setup_ms": setup_ms,
+        "ms_per_frame": stage_ms / config.frames,
+        "rays": integ.rays,
+        "rays_per_second": integ.rays / (stage_ms / 1e3) if stage_ms > 0 else 0.0,
+        "bytes_per_pixel": integ.buffers.per_pixel(w * h),
+        "scene_bytes": integ.dscene.memory_bytes(),
+        "triangles": scene.num_triangles,
+    }
+    return RenderResult((acc / config.frames).astype(np.float32), acc2 / config.frames, spp * config.frames, stats)

@@ -1,0 +1,66 @@
+"""Render configuration: the common settings and each method's documented, typed settings.
+
+Method settings (`--set key=value`) are validated against the method's SETTINGS table; an
+unknown key is an error, never silently ignored.
+"""
+from dataclasses import dataclass, field
+
+
+class ConfigError(ValueError):
+    pass
+
+
+@dataclass
+class RenderConfig:
+    method: str = "pt"
+    spp: int | None = None          # samples per pixel per frame (None: the scene's sample_count)
+    frames: int = 1                 # frames rendered; the output is their average
+    width: int | None = None        # None: the scene's film size
+    height: int | None = None
+    max_depth: int | None = None    # Mitsuba's meaning; None: the scene's integrator max_depth
+    seed: int = 0
+    device: str = "cpu"
+    settings: dict = field(default_factory=dict)   # method settings (see each method's SETTINGS)
+    slices: int | None = None       # CPU launch slices (None: one per core)
+
+    def validate(self) -> None:
+        if self.spp is not None and self.spp < 1:
+            raise ConfigError("spp must be >= 1")
+        if self.frames < 1:
+            raise ConfigError("frames must be >= 1")
+        for k in ("width", "height"):
+            v = getattr(self, k)
+            if v is not None and v < 1:
+                raise ConfigError(f"{k} must be >= 1")
+        if self.max_depth is not None and (self.max_depth == 0 or self.max_depth < -1):
+            raise ConfigError("max_depth must be -1 (unbounded) or >= 1")
+        if not 0 <= self.seed < 2**32:
+            raise ConfigError("seed must be in [0, 2^32)")
+
+
+def parse_value(text: str, like):
+    """Parse a --set value with the type of the setting's default."""
+    if isinstance(like, bool):
+        t = text.strip().lower()
+        if t in ("1", "true", "yes", "on"):
+            return True
+        if t in ("0", "false", "no", "off"):
+            return False
+        raise ConfigError(f"'{text}' is not a boolean")
+    try:
+        if isinstance(like, int):
+            return int(text)
+        if isinstance(like, float):
+            return float(text)
+    except ValueError:
+        raise ConfigError(f"'{text}' is not a {type(like).__name__}") from None
+    return text
+
+
+def method_settings(defaults: dict, overrides: dict) -> dict:
+    out = dict(defaults)
+    for k, v in overrides.items():
+        if k not in defaults:
+            raise ConfigError(f"unknown setting '{k}' (known: {', '.join(sorted(defaults)) or 'none'})")
+        out[k] = parse_value(v, defaults[k]) if isinstance(v, str) else v
+    return out

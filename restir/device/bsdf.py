@@ -1,0 +1,283 @@
+"""BSDFs: eval / pdf / sample with explicit random numbers, in the local shading frame.
+
+Conventions (Mitsuba's): `wi` points toward the previous vertex (the camera side), `wo` is the
+scattered direction, both away from the surface; `bsdf_eval` returns f(wi, wo) * |cos theta_o|;
+`BSDFSample.weight` = eval / pdf. Delta lobes have eval = pdf = 0 and `is_delta` set.
+Radiance is scaled by 1/eta^2 on refraction (radiance transport, as Mitsuba).
+"""
+import warp as wp
+
+from .fresnel import fresnel_conductor, fresnel_dielectric
+from .microfacet import Microfacet, microfacet_D, microfacet_G, microfacet_pdf, microfacet_sample
+from .sampling import cosine_hemisphere_pdf, square_to_cosine_hemisphere
+from .types import (
+    INV_PI,
+    MAT_CONDUCTOR,
+    MAT_DIELECTRIC,
+    MAT_DIFFUSE,
+    MAT_ROUGHCONDUCTOR,
+    MAT_ROUGHDIELECTRIC,
+    MAT_THINDIELECTRIC,
+)
+
+
+@wp.struct
+class Material:
+    kind: int
+    twosided: int              # 1: the back side behaves as the front (Mitsuba `twosided`)
+    reflectance: wp.vec3       # diffuse albedo
+    reflectance_tex: int       # texture index or -1
+    specular_reflectance: wp.vec3
+    specular_transmittance: wp.vec3
+    eta: wp.vec3               # conductor: real part of the complex IOR
+    k: wp.vec3                 # conductor: imaginary part
+    ior: float                 # dielectrics: interior / exterior IOR
+    distribution: int          # MICROFACET_*
+    alpha_u: float
+    alpha_v: float
+
+
+@wp.struct
+class BSDFSample:
+    wo: wp.vec3
+    weight: wp.vec3   # f * |cos| / pdf
+    pdf: float        # solid-angle density (the lobe-selection probability included)
+    is_delta: int
+    eta: float        # relative IOR crossed (1 for reflection)
+    valid: int
+
+
+@wp.func
+def invalid_sample() -> BSDFSample:
+    s = BSDFSample()
+    s.wo = wp.vec3(0.0, 0.0, 1.0)
+    s.weight = wp.vec3(0.0, 0.0, 0.0)
+    s.pdf = 0.0
+    s.is_delta = 0
+    s.eta = 1.0
+    s.valid = 0
+    return s
+
+
+@wp.func
+def microfacet_of(mat: Material) -> Microfacet:
+    d = Microfacet()
+    d.kind = mat.distribution
+    d.alpha_u = mat.alpha_u
+    d.alpha_v = mat.alpha_v
+    return d
+
+
+@wp.func
+def bsdf_is_delta_only(mat: Material) -> int:
+    if mat.kind == MAT_CONDUCTOR or mat.kind == MAT_DIELECTRIC or mat.kind == MAT_THINDIELECTRIC:
+        return 1
+    return 0
+
+
+@wp.func
+def reflect_local(wi: wp.vec3) -> wp.vec3:
+    return wp.vec3(-wi[0], -wi[1], wi[2])
+
+
+@wp.func
+def reflect_about(wi: wp.vec3, m: wp.vec3) -> wp.vec3:
+    return 2.0 * wp.dot(wi, m) * m - wi
+
+
+@wp.func
+def flip_z(v: wp.vec3) -> wp.vec3:
+    return wp.vec3(v[0], v[1], -v[2])
+
+
+# ----------------------------------------------------------------------------- rough dielectric helpers
+@wp.func
+def roughdielectric_half_vector(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    reflect = wi[2] * wo[2] > 0.0
+    eta = wp.where(wi[2] > 0.0, mat.ior, 1.0 / mat.ior)
+    m = wp.normalize(wi + wo * wp.where(reflect, 1.0, eta))
+    return m * wp.where(m[2] >= 0.0, 1.0, -1.0)
+
+
+@wp.func
+def roughdielectric_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    cos_i = wi[2]
+    cos_o = wo[2]
+    if cos_i == 0.0 or cos_o == 0.0:
+        return wp.vec3(0.0)
+    reflect = cos_i * cos_o > 0.0
+    eta = wp.where(cos_i > 0.0, mat.ior, 1.0 / mat.ior)
+    m = roughdielectric_half_vector(mat, wi, wo)
+    # A microfacet must be seen from the same side as its macro-surface by both directions.
+    if wp.dot(wi, m) * cos_i <= 0.0 or wp.dot(wo, m) * cos_o <= 0.0:
+        return wp.vec3(0.0)
+    d = microfacet_of(mat)
+    D = microfacet_D(d, m)
+    G = microfacet_G(d, wi, wo, m)
+    fr = fresnel_dielectric(wp.dot(wi, m), mat.ior)
+    if reflect:
+        v = fr.r * D * G / (4.0 * wp.abs(cos_i))
+        return mat.specular_reflectance * v
+    denom = wp.dot(wi, m) + eta * wp.dot(wo, m)
+    scale = 1.0 / (eta * eta)  # radiance compression across the interface
+    v = wp.abs(scale * (1.0 - fr.r) * D * G * eta * eta * wp.dot(wi, m) * wp.dot(wo, m) / (cos_i * denom * denom))
+    return mat.specular_transmittance * v
+
+
+@wp.func
+def roughdielectric_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
+    cos_i = wi[2]
+    cos_o = wo[2]
+    if cos_i == 0.0 or cos_o == 0.0:
+        return 0.0
+    reflect = cos_i * cos_o > 0.0
+    eta = wp.where(cos_i > 0.0, mat.ior, 1.0 / mat.ior)
+    m = roughdielectric_half_vector(mat, wi, wo)
+    if wp.dot(wi, m) * cos_i <= 0.0 or wp.dot(wo, m) * cos_o <= 0.0:
+        return 0.0
+    d = microfacet_of(mat)
+    s = wp.sign(cos_i)
+    prob = microfacet_pdf(d, wi * s, m)
+    fr = fresnel_dielectric(wp.dot(wi, m), mat.ior)
+    dwh_dwo = float(0.0)
+    if reflect:
+        dwh_dwo = 1.0 / (4.0 * wp.dot(wo, m))
+        prob = prob * fr.r
+    else:
+        denom = wp.dot(wi, m) + eta * wp.dot(wo, m)
+        dwh_dwo = eta * eta * wp.dot(wo, m) / (denom * denom)
+        prob = prob * (1.0 - fr.r)
+    return wp.abs(prob * dwh_dwo)
+
+
+# ----------------------------------------------------------------------------- dispatch
+@wp.func
+def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
+    wi = wi_in
+    wo = wo_in
+    if mat.twosided != 0 and wi[2] < 0.0:
+        wi = flip_z(wi)
+        wo = flip_z(wo)
+    if mat.kind == MAT_DIFFUSE:
+        if wi[2] <= 0.0 or wo[2] <= 0.0:
+            return wp.vec3(0.0)
+        return mat.reflectance * (INV_PI * wo[2])
+    if mat.kind == MAT_ROUGHCONDUCTOR:
+        if wi[2] <= 0.0 or wo[2] <= 0.0:
+            return wp.vec3(0.0)
+        m = wp.normalize(wi + wo)
+        d = microfacet_of(mat)
+        v = microfacet_D(d, m) * microfacet_G(d, wi, wo, m) / (4.0 * wi[2])
+        F = fresnel_conductor(wp.dot(wi, m), mat.eta, mat.k)
+        return wp.cw_mul(F, mat.specular_reflectance) * v
+    if mat.kind == MAT_ROUGHDIELECTRIC:
+        return roughdielectric_eval(mat, wi, wo)
+    return wp.vec3(0.0)
+
+
+@wp.func
+def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
+    wi = wi_in
+    wo = wo_in
+    if mat.twosided != 0 and wi[2] < 0.0:
+        wi = flip_z(wi)
+        wo = flip_z(wo)
+    if mat.kind == MAT_DIFFUSE:
+        if wi[2] <= 0.0:
+            return 0.0
+        return cosine_hemisphere_pdf(wo)
+    if mat.kind == MAT_ROUGHCONDUCTOR:
+        if wi[2] <= 0.0 or wo[2] <= 0.0:
+            return 0.0
+        m = wp.normalize(wi + wo)
+        d = microfacet_of(mat)
+        return microfacet_pdf(d, wi, m) / (4.0 * wp.dot(wo, m))
+    if mat.kind == MAT_ROUGHDIELECTRIC:
+        return roughdielectric_pdf(mat, wi, wo)
+    return 0.0
+
+
+@wp.func
+def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSDFSample:
+    wi = wi_in
+    flipped = mat.twosided != 0 and wi[2] < 0.0
+    if flipped:
+        wi = flip_z(wi)
+    s = invalid_sample()
+    if mat.kind == MAT_DIFFUSE:
+        if wi[2] <= 0.0:
+            return s
+        s.wo = square_to_cosine_hemisphere(u)
+        s.pdf = cosine_hemisphere_pdf(s.wo)
+        if s.pdf > 0.0:
+            s.weight = mat.reflectance
+            s.valid = 1
+    elif mat.kind == MAT_CONDUCTOR:
+        if wi[2] <= 0.0:
+            return s
+        s.wo = reflect_local(wi)
+        s.pdf = 1.0
+        s.is_delta = 1
+        s.weight = wp.cw_mul(fresnel_conductor(wi[2], mat.eta, mat.k), mat.specular_reflectance)
+        s.valid = 1
+    elif mat.kind == MAT_ROUGHCONDUCTOR:
+        if wi[2] <= 0.0:
+            return s
+        d = microfacet_of(mat)
+        m = microfacet_sample(d, wi, u)
+        s.wo = reflect_about(wi, m)
+        if s.wo[2] > 0.0:
+            s.pdf = bsdf_pdf(mat, wi, s.wo)
+            if s.pdf > 0.0:
+                s.weight = bsdf_eval(mat, wi, s.wo) / s.pdf
+                s.valid = 1
+    elif mat.kind == MAT_DIELECTRIC:
+        fr = fresnel_dielectric(wi[2], mat.ior)
+        s.is_delta = 1
+        s.valid = 1
+        if u_lobe <= fr.r:
+            s.wo = reflect_local(wi)
+            s.pdf = fr.r
+            s.weight = mat.specular_reflectance
+        else:
+            s.wo = wp.vec3(-fr.eta_ti * wi[0], -fr.eta_ti * wi[1], fr.cos_t)
+            s.pdf = 1.0 - fr.r
+            s.eta = fr.eta_it
+            s.weight = mat.specular_transmittance * (fr.eta_ti * fr.eta_ti)
+    elif mat.kind == MAT_THINDIELECTRIC:
+        fr = fresnel_dielectric(wp.abs(wi[2]), mat.ior)
+        r = fr.r
+        if r < 1.0:
+            t = 1.0 - r
+            r = r + t * t * r / (1.0 - r * r)  # inter-reflections inside the slab
+        s.is_delta = 1
+        s.valid = 1
+        if u_lobe <= r:
+            s.wo = reflect_local(wi)
+            s.pdf = r
+            s.weight = mat.specular_reflectance
+        else:
+            s.wo = -wi
+            s.pdf = 1.0 - r
+            s.weight = mat.specular_transmittance
+    elif mat.kind == MAT_ROUGHDIELECTRIC:
+        d = microfacet_of(mat)
+        sgn = wp.sign(wi[2])
+        m = microfacet_sample(d, wi * sgn, u)
+        fr = fresnel_dielectric(wp.dot(wi, m), mat.ior)
+        if u_lobe <= fr.r:
+            s.wo = reflect_about(wi, m)
+            if s.wo[2] * wi[2] <= 0.0:
+                return invalid_sample()
+        else:
+            s.wo = m * (wp.dot(wi, m) * fr.eta_ti + fr.cos_t) - wi * fr.eta_ti
+            s.eta = fr.eta_it
+            if s.wo[2] * wi[2] >= 0.0:
+                return invalid_sample()
+        s.pdf = roughdielectric_pdf(mat, wi, s.wo)
+        if s.pdf > 0.0:
+            s.weight = roughdielectric_eval(mat, wi, s.wo) / s.pdf
+            s.valid = 1
+    if flipped:
+        s.wo = flip_z(s.wo)
+    return s

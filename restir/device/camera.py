@@ -1,0 +1,71 @@
+"""Perspective camera with Mitsuba's conventions and filter importance sampling.
+
+Mitsuba's camera looks down +z of its local frame with +y up and +x toward the image's left.
+The reconstruction filter is sampled (FIS): a sample's offset from the pixel centre is drawn
+from the filter, and `CameraRay.weight` carries f/p where the filter is not sampled exactly.
+"""
+import warp as wp
+
+from .sampling import sample_cdf, sample_tent
+from .types import FILTER_BOX, FILTER_TENT
+
+
+@wp.struct
+class Camera:
+    to_world: wp.mat44
+    tan_half_x: float
+    tan_half_y: float
+    width: int
+    height: int
+    filter: int
+    filter_radius: float
+    # Gaussian (Mitsuba's: exp(-x^2/2s^2) minus its value at the radius), sampled from a
+    # tabulated piecewise-constant pdf; the weight f(x) / (integral * p(x)) keeps it exact.
+    filter_cdf: wp.array(dtype=float)      # bins+1 entries, cdf[0] = 0, cdf[bins] = 1
+    filter_bins: int
+    filter_stddev: float
+    filter_inv_integral: float
+
+
+@wp.struct
+class CameraRay:
+    o: wp.vec3
+    d: wp.vec3
+    weight: float
+
+
+@wp.func
+def gaussian_filter(cam: Camera, x: float) -> float:
+    a = -1.0 / (2.0 * cam.filter_stddev * cam.filter_stddev)
+    return wp.max(0.0, wp.exp(a * x * x) - wp.exp(a * cam.filter_radius * cam.filter_radius))
+
+
+@wp.func
+def sample_filter_1d(cam: Camera, u: float) -> wp.vec2:
+    """Returns (offset in pixels, weight f(x) / (p(x) * integral f))."""
+    if cam.filter == FILTER_BOX:
+        return wp.vec2((u - 0.5) * 2.0 * cam.filter_radius, 1.0)
+    if cam.filter == FILTER_TENT:
+        return wp.vec2(cam.filter_radius * sample_tent(u), 1.0)
+    n = cam.filter_bins
+    i = sample_cdf(cam.filter_cdf, 0, n, u)
+    c0 = cam.filter_cdf[i]
+    c1 = cam.filter_cdf[i + 1]
+    f = wp.clamp((u - c0) / wp.max(c1 - c0, 1.0e-30), 0.0, 0.999999)
+    width = 2.0 * cam.filter_radius / float(n)
+    x = -cam.filter_radius + (float(i) + f) * width
+    return wp.vec2(x, gaussian_filter(cam, x) * cam.filter_inv_integral / ((c1 - c0) / width))
+
+
+@wp.func
+def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
+    fx = sample_filter_1d(cam, u[0])
+    fy = sample_filter_1d(cam, u[1])
+    sx = (float(px) + 0.5 + fx[0]) / float(cam.width)
+    sy = (float(py) + 0.5 + fy[0]) / float(cam.height)
+    d_local = wp.vec3((1.0 - 2.0 * sx) * cam.tan_half_x, (1.0 - 2.0 * sy) * cam.tan_half_y, 1.0)
+    r = CameraRay()
+    r.o = wp.transform_point(cam.to_world, wp.vec3(0.0, 0.0, 0.0))
+    r.d = wp.normalize(wp.transform_vector(cam.to_world, d_local))
+    r.weight = fx[1] * fy[1]
+    return r

@@ -1,0 +1,73 @@
+"""Ray queries: closest hit and visibility, with Mitsuba's self-intersection offsets.
+
+All tracing goes through `trace_closest` and `is_visible`, so the tracer behind them can change
+(Warp BVH on every device today) without touching any stage.
+"""
+import warp as wp
+
+from .scene_device import SceneDevice
+
+# Mitsuba: RayEpsilon = 1500 * 2^-24, ShadowEpsilon = 10 * RayEpsilon.
+RAY_EPSILON = wp.constant(8.940696716308594e-05)
+SHADOW_EPSILON = wp.constant(8.940696716308594e-04)
+T_MAX = wp.constant(1.0e30)
+
+
+@wp.struct
+class SurfaceHit:
+    valid: int
+    t: float
+    p: wp.vec3
+    ng: wp.vec3    # unit geometric normal (triangle winding)
+    ns: wp.vec3    # unit shading normal
+    uv: wp.vec2
+    tri: int
+
+
+@wp.func
+def offset_origin(p: wp.vec3, ng: wp.vec3, d: wp.vec3) -> wp.vec3:
+    """Move p off the surface, to the side of ng that d points to."""
+    mag = (1.0 + wp.max(wp.max(wp.abs(p[0]), wp.abs(p[1])), wp.abs(p[2]))) * RAY_EPSILON
+    return p + ng * wp.where(wp.dot(ng, d) >= 0.0, mag, -mag)
+
+
+@wp.func
+def surface_at(scene: SceneDevice, tri: int, bu: float, bv: float, t: float) -> SurfaceHit:
+    """Reconstruct a hit from a triangle and Warp's barycentrics (p = u*p0 + v*p1 + w*p2)."""
+    bw = 1.0 - bu - bv
+    i0 = 3 * tri
+    p0 = scene.positions[i0]
+    p1 = scene.positions[i0 + 1]
+    p2 = scene.positions[i0 + 2]
+    h = SurfaceHit()
+    h.valid = 1
+    h.t = t
+    h.tri = tri
+    h.p = p0 * bu + p1 * bv + p2 * bw
+    h.ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+    h.ns = h.ng
+    if scene.tri_smooth[tri] != 0:
+        n = scene.normals[i0] * bu + scene.normals[i0 + 1] * bv + scene.normals[i0 + 2] * bw
+        ln = wp.length(n)
+        if ln > 0.0:
+            h.ns = n / ln
+    h.uv = scene.uvs[i0] * bu + scene.uvs[i0 + 1] * bv + scene.uvs[i0 + 2] * bw
+    return h
+
+
+@wp.func
+def trace_closest(scene: SceneDevice, o: wp.vec3, d: wp.vec3, t_max: float) -> SurfaceHit:
+    q = wp.mesh_query_ray(scene.mesh, o, d, t_max)
+    if not q.result:
+        h = SurfaceHit()
+        h.valid = 0
+        h.t = T_MAX
+        h.tri = -1
+        return h
+    return surface_at(scene, q.face, q.u, q.v, q.t)
+
+
+@wp.func
+def is_visible(scene: SceneDevice, o: wp.vec3, d: wp.vec3, dist: float) -> bool:
+    """True if nothing blocks the unit direction d from o over (0, dist); stops short of the end."""
+    return not wp.mesh_query_ray_anyhit(scene.mesh, o, d, dist * (1.0 - SHADOW_EPSILON))

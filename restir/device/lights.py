@@ -1,0 +1,168 @@
+"""Light sampling (NEE) and emission lookup for area emitters and environment emitters.
+
+Area emitters: a triangle is chosen in proportion to its power (alias table), then a point
+uniformly by area; the density is converted to solid angle at the shading point. The
+environment (constant or lat-long map, Mitsuba's mapping) is chosen with env_select_prob.
+"""
+import warp as wp
+
+from .sampling import sample_alias, sample_cdf, square_to_uniform_sphere, square_to_uniform_triangle
+from .scene_device import SceneDevice
+from .types import ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, PI
+
+
+@wp.struct
+class LightSample:
+    wi: wp.vec3      # unit direction from the shading point toward the light
+    dist: float      # distance to the light point (T_MAX-like for the environment)
+    p: wp.vec3       # light point (surface lights)
+    n: wp.vec3       # geometric normal at the light point
+    Le: wp.vec3      # emitted radiance toward the shading point
+    pdf: float       # solid-angle density, selection probability included; 0 = failed
+    is_env: int
+
+
+# ----------------------------------------------------------------------------- environment
+@wp.func
+def env_dir_to_uv(scene: SceneDevice, d_world: wp.vec3) -> wp.vec2:
+    v = scene.env_to_local * d_world
+    u = wp.atan2(v[0], -v[2]) * (0.5 / PI)
+    u = u - wp.floor(u)
+    t = wp.acos(wp.clamp(v[1], -1.0, 1.0)) / PI
+    return wp.vec2(u, t)
+
+
+@wp.func
+def env_uv_to_dir(scene: SceneDevice, uv: wp.vec2) -> wp.vec3:
+    phi = 2.0 * PI * uv[0]
+    theta = PI * uv[1]
+    st = wp.sin(theta)
+    v = wp.vec3(st * wp.sin(phi), wp.cos(theta), -st * wp.cos(phi))
+    return scene.env_to_world * v
+
+
+@wp.func
+def env_pixel(scene: SceneDevice, uv: wp.vec2) -> int:
+    x = wp.min(int(uv[0] * float(scene.env_width)), scene.env_width - 1)
+    y = wp.min(int(uv[1] * float(scene.env_height)), scene.env_height - 1)
+    return y * scene.env_width + x
+
+
+@wp.func
+def env_eval(scene: SceneDevice, d_world: wp.vec3) -> wp.vec3:
+    if scene.env_kind == ENV_CONSTANT:
+        return scene.env_radiance
+    if scene.env_kind == ENV_MAP:
+        uv = env_dir_to_uv(scene, d_world)
+        return wp.cw_mul(scene.env_pixels[env_pixel(scene, uv)], scene.env_radiance)
+    return wp.vec3(0.0)
+
+
+@wp.func
+def env_pdf(scene: SceneDevice, d_world: wp.vec3) -> float:
+    """Solid-angle density of env sampling, selection probability included."""
+    if scene.env_kind == ENV_CONSTANT:
+        return scene.env_select_prob * INV_FOUR_PI
+    if scene.env_kind == ENV_MAP:
+        uv = env_dir_to_uv(scene, d_world)
+        i = env_pixel(scene, uv)
+        y = i // scene.env_width
+        x = i - y * scene.env_width
+        row = y * (scene.env_width + 1)
+        p_row = scene.env_marginal_cdf[y + 1] - scene.env_marginal_cdf[y]
+        p_col = scene.env_conditional_cdf[row + x + 1] - scene.env_conditional_cdf[row + x]
+        st = wp.sin(PI * uv[1])
+        if st <= 0.0:
+            return 0.0
+        pdf_uv = p_row * p_col * float(scene.env_width * scene.env_height)
+        return scene.env_select_prob * pdf_uv / (2.0 * PI * PI * st)
+    return 0.0
+
+
+@wp.func
+def sample_env(scene: SceneDevice, u: wp.vec2) -> LightSample:
+    ls = LightSample()
+    ls.is_env = 1
+    ls.dist = 1.0e30
+    ls.pdf = 0.0
+    if scene.env_kind == ENV_CONSTANT:
+        ls.wi = square_to_uniform_sphere(u)
+    elif scene.env_kind == ENV_MAP:
+        y = sample_cdf(scene.env_marginal_cdf, 0, scene.env_height, u[1])
+        y0 = scene.env_marginal_cdf[y]
+        y1 = scene.env_marginal_cdf[y + 1]
+        fy = (u[1] - y0) / wp.max(y1 - y0, 1.0e-30)
+        row = y * (scene.env_width + 1)
+        x = sample_cdf(scene.env_conditional_cdf, row, scene.env_width, u[0])
+        x0 = scene.env_conditional_cdf[row + x]
+        x1 = scene.env_conditional_cdf[row + x + 1]
+        fx = (u[0] - x0) / wp.max(x1 - x0, 1.0e-30)
+        uv = wp.vec2((float(x) + wp.clamp(fx, 0.0, 0.999999)) / float(scene.env_width),
+                     (float(y) + wp.clamp(fy, 0.0, 0.999999)) / float(scene.env_height))
+        ls.wi = env_uv_to_dir(scene, uv)
+    else:
+        return ls
+    ls.Le = env_eval(scene, ls.wi)
+    ls.pdf = env_pdf(scene, ls.wi)
+    return ls
+
+
+# ----------------------------------------------------------------------------- area emitters
+@wp.func
+def triangle_emission(scene: SceneDevice, tri: int, ns: wp.vec3, w_out: wp.vec3) -> wp.vec3:
+    """Radiance leaving emissive triangle `tri` toward w_out (front side of the shading normal)."""
+    if wp.dot(ns, w_out) <= 0.0:
+        return wp.vec3(0.0)
+    return scene.tri_emission[tri]
+
+
+@wp.func
+def triangle_light_pdf(scene: SceneDevice, tri: int, ng: wp.vec3, w_to_light: wp.vec3, dist: float) -> float:
+    """Solid-angle density with which NEE from a point at `dist` samples this point of `tri`."""
+    cos_l = wp.abs(wp.dot(ng, w_to_light))
+    if cos_l <= 0.0:
+        return 0.0
+    return (1.0 - scene.env_select_prob) * scene.tri_light_pdf[tri] * dist * dist / cos_l
+
+
+@wp.func
+def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.vec2) -> LightSample:
+    ls = LightSample()
+    ls.is_env = 0
+    ls.pdf = 0.0
+    k = sample_alias(scene.light_prob, scene.light_alias, u_sel)
+    tri = int(scene.light_tri[k])
+    b = square_to_uniform_triangle(u)
+    i0 = 3 * tri
+    p0 = scene.positions[i0]
+    p1 = scene.positions[i0 + 1]
+    p2 = scene.positions[i0 + 2]
+    ls.p = p0 * (1.0 - b[0] - b[1]) + p1 * b[0] + p2 * b[1]
+    ls.n = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+    ns = ls.n
+    if scene.tri_smooth[tri] != 0:
+        n = scene.normals[i0] * (1.0 - b[0] - b[1]) + scene.normals[i0 + 1] * b[0] + scene.normals[i0 + 2] * b[1]
+        if wp.length(n) > 0.0:
+            ns = wp.normalize(n)
+    d = ls.p - x
+    dist = wp.length(d)
+    if dist <= 0.0:
+        return ls
+    ls.wi = d / dist
+    ls.dist = dist
+    ls.Le = triangle_emission(scene, tri, ns, -ls.wi)
+    ls.pdf = triangle_light_pdf(scene, tri, ls.n, ls.wi, dist)
+    return ls
+
+
+@wp.func
+def sample_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.vec2) -> LightSample:
+    """One light sample for NEE. u_sel picks env vs. triangles and then the triangle."""
+    if scene.env_kind != ENV_NONE and (scene.num_tri_lights == 0 or u_sel < scene.env_select_prob):
+        return sample_env(scene, u)
+    if scene.num_tri_lights == 0:
+        ls = LightSample()
+        ls.pdf = 0.0
+        return ls
+    u2 = wp.where(scene.env_kind != ENV_NONE, (u_sel - scene.env_select_prob) / (1.0 - scene.env_select_prob), u_sel)
+    return sample_triangle_light(scene, x, wp.min(u2, 0.99999994), u)

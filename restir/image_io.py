@@ -1,0 +1,63 @@
+"""EXR / PNG input and output (linear float RGB arrays of shape (H, W, 3))."""
+import os
+
+import numpy as np
+
+
+def write_exr(path: str, rgb: np.ndarray) -> None:
+    import OpenEXR
+
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"RGB": rgb}) as f:
+        f.write(path)
+
+
+def read_exr(path: str) -> np.ndarray:
+    import OpenEXR
+
+    with OpenEXR.File(path) as f:
+        ch = f.channels()
+        if "RGB" in ch:
+            return np.asarray(ch["RGB"].pixels, np.float32)[..., :3]
+        if "RGBA" in ch:
+            return np.asarray(ch["RGBA"].pixels, np.float32)[..., :3]
+        return np.stack([np.asarray(ch[c].pixels, np.float32) for c in "RGB"], -1)
+
+
+def srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(x: np.ndarray) -> np.ndarray:
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def read_image(path: str, linearize_srgb: bool = True) -> np.ndarray:
+    """Any EXR, or an 8-bit image (sRGB-decoded unless linearize_srgb is False), as float RGB."""
+    if path.lower().endswith(".exr"):
+        return read_exr(path)
+    from PIL import Image
+
+    img = np.asarray(Image.open(path).convert("RGB"), np.float32) / 255.0
+    return srgb_to_linear(img) if linearize_srgb else img
+
+
+def write_png(path: str, rgb: np.ndarray, exposure: float = 0.0) -> None:
+    """Tonemap linear RGB with exposure (stops) and the sRGB curve; non-finite pixels become black."""
+    from PIL import Image
+
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    x = np.nan_to_num(np.asarray(rgb, np.float64) * (2.0 ** exposure), nan=0.0, posinf=0.0, neginf=0.0)
+    Image.fromarray((linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)).save(path)
+
+
+def write_image(path: str, rgb: np.ndarray, exposure: float = 0.0) -> None:
+    if path.lower().endswith(".exr"):
+        write_exr(path, rgb)
+    elif path.lower().endswith((".png", ".jpg", ".jpeg")):
+        write_png(path, rgb, exposure)
+    else:
+        raise ValueError(f"unknown image format for '{path}' (use .exr or .png)")

@@ -1,0 +1,40 @@
+"""Integrator protocol: allocate buffers once, then render frames; stages are timed by name."""
+import numpy as np
+import warp as wp
+
+from ..timing import BufferRegistry, StageTimer
+
+
+class Integrator:
+    """Base class. Subclasses list STAGES and implement `render_frame` as a table of contents."""
+
+    name = "base"
+    STAGES: tuple[str, ...] = ()
+    KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
+
+    def __init__(self, dscene, settings: dict, device: str, slices: int | None = None):
+        self.dscene = dscene
+        self.settings = settings
+        self.device = wp.get_device(device)
+        self.slices = slices
+        self.timer = StageTimer(self.device)
+        self.buffers = BufferRegistry()
+        cam = dscene.host.camera
+        self.width, self.height = cam.width, cam.height
+        self.num_pixels = self.width * self.height
+        self.rays = 0
+        self.allocate()
+        for k in self.KERNELS:
+            wp.load_module(k.module, device=self.device)
+
+    def buffer(self, name: str, dtype, shape=None):
+        a = wp.zeros(shape or self.num_pixels, dtype=dtype, device=self.device)
+        self.buffers.add(name, a)
+        return a
+
+    def allocate(self) -> None:
+        raise NotImplementedError
+
+    def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        """Returns (mean, second moment) per pixel over this frame's samples, each (H, W, 3)."""
+        raise NotImplementedError

@@ -1,0 +1,214 @@
+"""Reference path tracer: NEE and BSDF sampling combined with the balance heuristic.
+
+Stage `path_trace` (one kernel): reads the scene and camera; writes `frame_mean` and
+`frame_m2` (per-pixel mean and second moment of this frame's spp samples).
+`max_depth` has Mitsuba's meaning (number of path segments; 1 = directly visible emission,
+2 = direct illumination, -1 = unbounded up to MAX_SEGMENTS). Russian roulette (Mitsuba's rule,
+off by default) starts at `rr_depth`. `strategy` selects MIS (default), NEE-only or BSDF-only,
+three estimators of the same integral used to cross-check each other.
+"""
+import numpy as np
+import warp as wp
+
+from ..device.bsdf import bsdf_eval, bsdf_is_delta_only, bsdf_pdf, bsdf_sample
+from ..device.camera import Camera, generate_ray
+from ..device.intersect import T_MAX, is_visible, offset_origin, trace_closest
+from ..device.lights import env_eval, env_pdf, sample_light, triangle_emission, triangle_light_pdf
+from ..device.rng import rng_key, rng_uniform, rng_uniform2
+from ..device.sampling import frame_from_normal, to_local, to_world
+from ..device.scene_device import SceneDevice, material_at
+from ..device.types import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_FILM, DIM_LIGHT_POINT, DIM_LIGHT_SELECT,
+                            DIMS_PER_BOUNCE, DIMS_PER_SAMPLE, ENV_NONE, STAGE_PATH_TRACE, STRATEGY_BSDF,
+                            STRATEGY_MIS, STRATEGY_NEE)
+from ..parallel import launch_pixels
+from .base import Integrator
+
+MAX_SEGMENTS = 1023  # DIMS_PER_SAMPLE / DIMS_PER_BOUNCE - 1: random streams of samples never overlap
+STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
+
+
+@wp.struct
+class PTParams:
+    seed: wp.uint32
+    frame: wp.uint32
+    spp: int
+    max_depth: int
+    rr_depth: int
+    use_rr: int
+    strategy: int
+    hide_emitters: int
+
+
+@wp.func
+def emission_weight(params: PTParams, prev_delta: int, p_bsdf: float, p_light: float) -> float:
+    """Weight of emission found by BSDF sampling (camera rays and delta bounces count as delta)."""
+    if prev_delta != 0 or params.strategy == STRATEGY_BSDF:
+        return 1.0
+    if params.strategy == STRATEGY_NEE:
+        return 0.0
+    return p_bsdf / (p_bsdf + p_light)
+
+
+@wp.func
+def max3(v: wp.vec3) -> float:
+    return wp.max(wp.max(v[0], v[1]), v[2])
+
+
+@wp.struct
+class PathResult:
+    L: wp.vec3
+    rays: int
+
+
+@wp.func
+def path_radiance(scene: SceneDevice, params: PTParams, o_in: wp.vec3, d_in: wp.vec3, key: wp.uint32, base: wp.uint32) -> PathResult:
+    rays = int(0)
+    L = wp.vec3(0.0)
+    beta = wp.vec3(1.0)
+    o = o_in
+    d = d_in
+    prev_pdf = float(1.0)
+    prev_delta = int(1)
+    eta = float(1.0)
+    max_depth = wp.where(params.max_depth < 0, MAX_SEGMENTS, wp.min(params.max_depth, MAX_SEGMENTS))
+    depth = int(0)
+    while True:
+        hit = trace_closest(scene, o, d, T_MAX)
+        rays += 1
+        visible_emitter = not (params.hide_emitters != 0 and depth == 0)
+        # ---- escaped: environment emission
+        if hit.valid == 0:
+            if scene.env_kind != ENV_NONE and visible_emitter:
+                w = emission_weight(params, prev_delta, prev_pdf, env_pdf(scene, d))
+                L += wp.cw_mul(beta, env_eval(scene, d)) * w
+            break
+        # ---- emission found by BSDF sampling (or seen directly)
+        Le = triangle_emission(scene, hit.tri, hit.ns, -d)
+        if max3(Le) > 0.0 and visible_emitter:
+            w = emission_weight(params, prev_delta, prev_pdf, triangle_light_pdf(scene, hit.tri, hit.ng, d, hit.t))
+            L += wp.cw_mul(beta, Le) * w
+        if depth + 1 >= max_depth:
+            break
+        mat = material_at(scene, hit.tri, hit.uv)
+        frame = frame_from_normal(hit.ns)
+        wi = to_local(frame, -d)
+        dim = base + wp.uint32((depth + 1) * DIMS_PER_BOUNCE)
+        # ---- next-event estimation
+        if params.strategy != STRATEGY_BSDF and bsdf_is_delta_only(mat) == 0:
+            ls = sample_light(scene, hit.p, rng_uniform(key, dim + wp.uint32(DIM_LIGHT_SELECT)),
+                              rng_uniform2(key, dim + wp.uint32(DIM_LIGHT_POINT)))
+            if ls.pdf > 0.0 and max3(ls.Le) > 0.0:
+                wo = to_local(frame, ls.wi)
+                f = bsdf_eval(mat, wi, wo)
+                if max3(f) > 0.0:
+                    origin = offset_origin(hit.p, hit.ng, ls.wi)
+                    rays += 1
+                    vis = bool(False)
+                    if ls.is_env != 0:
+                        vis = is_visible(scene, origin, ls.wi, T_MAX)
+                    else:
+                        target = offset_origin(ls.p, ls.n, -ls.wi)
+                        seg = target - origin
+                        dist = wp.length(seg)
+                        vis = dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
+                    if vis:
+                        w = float(1.0)
+                        if params.strategy == STRATEGY_MIS:
+                            w = ls.pdf / (ls.pdf + bsdf_pdf(mat, wi, wo))
+                        L += wp.cw_mul(beta, wp.cw_mul(f, ls.Le)) * (w / ls.pdf)
+        # ---- BSDF sampling
+        bs = bsdf_sample(mat, wi, rng_uniform(key, dim + wp.uint32(DIM_BSDF_LOBE)),
+                         rng_uniform2(key, dim + wp.uint32(DIM_BSDF_DIR)))
+        if bs.valid == 0:
+            break
+        beta = wp.cw_mul(beta, bs.weight)
+        if max3(beta) <= 0.0:
+            break
+        d = wp.normalize(to_world(frame, bs.wo))
+        o = offset_origin(hit.p, hit.ng, d)
+        prev_pdf = bs.pdf
+        prev_delta = bs.is_delta
+        eta = eta * bs.eta
+        depth += 1
+        # ---- Russian roulette (Mitsuba's rule; off by default)
+        if params.use_rr != 0 and depth >= params.rr_depth:
+            q = wp.min(max3(beta) * eta * eta, 0.95)
+            if rng_uniform(key, dim + wp.uint32(DIMS_PER_BOUNCE - 1)) >= q:
+                break
+            beta = beta / q
+    res = PathResult()
+    res.L = L
+    res.rays = rays
+    return res
+
+
+@wp.kernel
+def path_trace_kernel(
+    offset: int,
+    scene: SceneDevice,
+    camera: Camera,
+    params: PTParams,
+    frame_mean: wp.array(dtype=wp.vec3),
+    frame_m2: wp.array(dtype=wp.vec3),
+    frame_rays: wp.array(dtype=wp.int32),
+):
+    pixel = wp.tid() + offset
+    px = pixel % camera.width
+    py = pixel // camera.width
+    key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
+    acc = wp.vec3(0.0)
+    acc2 = wp.vec3(0.0)
+    rays = int(0)
+    for s in range(params.spp):
+        base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
+        ray = generate_ray(camera, px, py, rng_uniform2(key, base + wp.uint32(DIM_FILM)))
+        res = path_radiance(scene, params, ray.o, ray.d, key, base)
+        L = res.L * ray.weight
+        rays += res.rays
+        acc += L
+        acc2 += wp.cw_mul(L, L)
+    inv = 1.0 / float(params.spp)
+    frame_mean[pixel] = acc * inv
+    frame_m2[pixel] = acc2 * inv
+    frame_rays[pixel] = rays
+
+
+class PathTracer(Integrator):
+    name = "pt"
+    STAGES = ("path_trace",)
+    KERNELS = (path_trace_kernel,)
+    SETTINGS = {"strategy": "mis", "rr": False}
+
+    @staticmethod
+    def check_settings(settings: dict) -> None:
+        from ..config import ConfigError
+
+        if settings["strategy"] not in STRATEGIES:
+            raise ConfigError(f"strategy must be one of {', '.join(STRATEGIES)}")
+
+    def allocate(self) -> None:
+        self.frame_mean = self.buffer("frame_mean", wp.vec3)
+        self.frame_m2 = self.buffer("frame_m2", wp.vec3)
+        self.frame_rays = self.buffer("frame_rays", wp.int32)
+
+    def params(self, frame: int) -> PTParams:
+        s = self.settings
+        p = PTParams()
+        p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
+        p.frame = wp.uint32(frame)
+        p.spp = int(s["spp"])
+        p.max_depth = int(s["max_depth"])
+        p.rr_depth = int(s["rr_depth"])
+        p.use_rr = int(bool(s["rr"]))
+        p.strategy = int(STRATEGIES[s["strategy"]])
+        p.hide_emitters = int(bool(s["hide_emitters"]))
+        return p
+
+    def render_frame(self, frame: int):
+        with self.timer.stage("path_trace"):
+            launch_pixels(path_trace_kernel, self.num_pixels,
+                          inputs=[self.dscene.scene, self.dscene.camera, self.params(frame)],
+                          outputs=[self.frame_mean, self.frame_m2, self.frame_rays], device=self.device, slices=self.slices)
+        self.rays += int(self.frame_rays.numpy().sum(dtype=np.int64))
+        shape = (self.height, self.width, 3)
+        return self.frame_mean.numpy().reshape(shape), self.frame_m2.numpy().reshape(shape)

@@ -1,0 +1,178 @@
+"""Built-in scenes, written as Mitsuba-style dicts.
+
+- `cornell-box`: the Cornell box from the Cornell University Program of Computer Graphics'
+  published measurements (geometry in mm, converted to metres; camera at (278, 273, -800) mm,
+  35 mm focal length on a 25 mm film). Spectral reflectances and the light's emission are
+  replaced by the RGB values in common use (Bitterli's resources, Mitsuba's `cornell_box()`).
+  The light sits 0.1 mm below the ceiling so that the two do not share a plane.
+- `cornell-box-glossy`: the same box with a GGX rough-conductor tall block and Beckmann walls.
+- `furnace`: a closed sphere, diffuse albedo 0.5, emitting 0.5 everywhere inside; every
+  pixel's value is 1 - 0.5^max_depth (1 for unbounded depth).
+- `sphere-cap`: TESTING.md A1: a closed diffuse sphere whose emissive cap covers a fraction
+  `phi` of its area; every non-emitting point has the same radiance (see `sphere_cap_radiance`).
+"""
+import math
+
+import numpy as np
+
+from .errors import SceneError
+
+WHITE = [0.725, 0.71, 0.68]
+RED = [0.63, 0.065, 0.05]
+GREEN = [0.14, 0.45, 0.091]
+LIGHT = [17.0, 12.0, 4.0]
+
+_QUADS = {
+    "floor": ([552.8, 0, 0], [0, 0, 0], [0, 0, 559.2], [549.6, 0, 559.2]),
+    "ceiling": ([556, 548.8, 0], [556, 548.8, 559.2], [0, 548.8, 559.2], [0, 548.8, 0]),
+    "back": ([549.6, 0, 559.2], [0, 0, 559.2], [0, 548.8, 559.2], [556, 548.8, 559.2]),
+    "green": ([0, 0, 559.2], [0, 0, 0], [0, 548.8, 0], [0, 548.8, 559.2]),
+    "red": ([552.8, 0, 0], [549.6, 0, 559.2], [556, 548.8, 559.2], [556, 548.8, 0]),
+    "light": ([343, 548.7, 227], [343, 548.7, 332], [213, 548.7, 332], [213, 548.7, 227]),
+}
+_SHORT_BLOCK = [
+    ([130, 165, 65], [82, 165, 225], [240, 165, 272], [290, 165, 114]),
+    ([290, 0, 114], [290, 165, 114], [240, 165, 272], [240, 0, 272]),
+    ([130, 0, 65], [130, 165, 65], [290, 165, 114], [290, 0, 114]),
+    ([82, 0, 225], [82, 165, 225], [130, 165, 65], [130, 0, 65]),
+    ([240, 0, 272], [240, 165, 272], [82, 165, 225], [82, 0, 225]),
+]
+_TALL_BLOCK = [
+    ([423, 330, 247], [265, 330, 296], [314, 330, 456], [472, 330, 406]),
+    ([423, 0, 247], [423, 330, 247], [472, 330, 406], [472, 0, 406]),
+    ([472, 0, 406], [472, 330, 406], [314, 330, 456], [314, 0, 456]),
+    ([314, 0, 456], [314, 330, 456], [265, 330, 296], [265, 0, 296]),
+    ([265, 0, 296], [265, 330, 296], [423, 330, 247], [423, 0, 247]),
+]
+
+
+def _quads_mesh(quads, bsdf, emitter=None) -> dict:
+    verts, faces = [], []
+    for q in quads:
+        b = len(verts)
+        verts += [np.array(v, float) / 1000.0 for v in q]
+        faces += [[b, b + 1, b + 2], [b, b + 2, b + 3]]
+    d = {"type": "trimesh", "vertices": np.array(verts), "faces": np.array(faces), "bsdf": bsdf}
+    if emitter:
+        d["emitter"] = emitter
+    return d
+
+
+def _diffuse(rgb, twosided=True) -> dict:
+    b = {"type": "diffuse", "reflectance": {"type": "rgb", "value": rgb}}
+    return {"type": "twosided", "bsdf": b} if twosided else b
+
+
+def _sensor(width, height, fov, to_world, spp, rfilter="tent") -> dict:
+    return {
+        "type": "perspective", "fov": fov, "fov_axis": "x", "to_world": to_world,
+        "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": rfilter}},
+        "sampler": {"type": "independent", "sample_count": spp},
+    }
+
+
+def _look_at(origin, target, up):
+    from .transforms import look_at
+
+    return look_at(origin, target, up)
+
+
+def cornell_box(glossy: bool = False, width=512, height=512, spp=16, max_depth=-1) -> dict:
+    fov = math.degrees(2 * math.atan(12.5 / 35.0))
+    cam = _look_at([0.278, 0.273, -0.800], [0.278, 0.273, 0.0], [0, 1, 0])
+    white = _diffuse(WHITE)
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth},
+        "sensor": _sensor(width, height, fov, cam, spp),
+        "floor": _quads_mesh([_QUADS["floor"]], white),
+        "ceiling": _quads_mesh([_QUADS["ceiling"]], white),
+        "back": _quads_mesh([_QUADS["back"]], white),
+        "green": _quads_mesh([_QUADS["green"]], _diffuse(GREEN)),
+        "red": _quads_mesh([_QUADS["red"]], _diffuse(RED)),
+        "short": _quads_mesh(_SHORT_BLOCK, white),
+        "tall": _quads_mesh(_TALL_BLOCK, white),
+        "light": _quads_mesh([_QUADS["light"]], _diffuse([0, 0, 0]),
+                             {"type": "area", "radiance": {"type": "rgb", "value": LIGHT}}),
+    }
+    if glossy:
+        scene["tall"]["bsdf"] = {"type": "twosided", "bsdf": {
+            "type": "roughconductor", "distribution": "ggx", "alpha": 0.25,
+            "eta": {"type": "rgb", "value": [0.2004, 0.9240, 1.1022]},
+            "k": {"type": "rgb", "value": [3.9129, 2.4528, 2.1422]}}}
+        scene["back"]["bsdf"] = {"type": "twosided", "bsdf": {
+            "type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
+            "specular_reflectance": {"type": "rgb", "value": WHITE}}}
+    return scene
+
+
+def furnace(width=32, height=32, spp=16, max_depth=-1, albedo=0.5, radiance=0.5) -> dict:
+    return sphere_cap(width, height, spp, max_depth, albedo, radiance, phi=1.0)
+
+
+def sphere_cap(width=32, height=32, spp=16, max_depth=-1, albedo=0.5, radiance=1.0, phi=0.05,
+               segments=128) -> dict:
+    """Unit sphere seen from inside; the cap z > 1 - 2 phi emits `radiance` (phi = 1: all)."""
+    cam = _look_at([0, 0, 0.5], [0, 0, -1], [0, 1, 0])  # looks away from the cap
+    bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [albedo] * 3}}
+    emit = {"type": "area", "radiance": {"type": "rgb", "value": [radiance] * 3}}
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth},
+        "sensor": _sensor(width, height, 60.0, cam, spp, "box"),
+    }
+    if phi >= 1.0:
+        scene["sphere"] = {"type": "sphere", "radius": 1.0, "flip_normals": True, "bsdf": bsdf,
+                           "emitter": emit, "segments": segments}
+        return scene
+    scene["wall"] = {"type": "trimesh", **_sphere_band(segments, -1.0, 1 - 2 * phi), "bsdf": bsdf}
+    scene["cap"] = {"type": "trimesh", **_sphere_band(segments, 1 - 2 * phi, 1.0), "bsdf": bsdf, "emitter": emit}
+    return scene
+
+
+def _sphere_band(segments: int, z0: float, z1: float) -> dict:
+    """Inward-facing triangles of the unit sphere between heights z0 and z1 (equal-area rings)."""
+    n_phi, n_z = 2 * segments, segments
+    zs = np.linspace(z0, z1, max(2, int(round(n_z * (z1 - z0) / 2)) + 1))
+    ph = np.linspace(0, 2 * np.pi, n_phi + 1)
+    verts, faces = [], []
+    r = np.sqrt(np.maximum(0, 1 - zs ** 2))
+    for i, z in enumerate(zs):
+        for p in ph:
+            verts.append([r[i] * np.cos(p), r[i] * np.sin(p), z])
+    idx = lambda i, j: i * (n_phi + 1) + j  # noqa: E731
+    for i in range(len(zs) - 1):
+        for j in range(n_phi):
+            a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+            if r[i] > 0:
+                faces.append([a, d, b])
+            if r[i + 1] > 0:
+                faces.append([b, d, c])
+    v, f = np.array(verts), np.array(faces)
+    p = v[f]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    inward = np.einsum("ij,ij->i", n, p.mean(1)) < 0
+    f[~inward] = f[~inward][:, ::-1]
+    return {"vertices": v, "faces": f}
+
+
+def sphere_cap_radiance(albedo: float, radiance: float, phi: float, max_depth: int) -> float:
+    """A1: L = rho * phi * Le * sum_{j<n} rho^j at non-emitting points, n = max_depth - 1 bounces."""
+    if max_depth < 0:
+        return albedo * phi * radiance / (1 - albedo)
+    n = max_depth - 1
+    return albedo * phi * radiance * sum(albedo ** j for j in range(n))
+
+
+BUILTINS = {
+    "cornell-box": cornell_box,
+    "cornell-box-glossy": lambda **kw: cornell_box(glossy=True, **kw),
+    "furnace": furnace,
+    "sphere-cap": sphere_cap,
+}
+
+
+def builtin_scene(name: str, **kwargs) -> dict:
+    if name not in BUILTINS:
+        raise SceneError(f"unknown builtin scene '{name}' (available: {', '.join(sorted(BUILTINS))})", f"builtin:{name}")
+    return BUILTINS[name](**kwargs)

@@ -1,0 +1,458 @@
+"""Host scene: built from a scene dict (XML or builtin), converted to a SceneDevice for kernels."""
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import shapes as shape_lib
+from .errors import SceneError, warn
+from .light_tables import alias_table, cdf_1d, env_tables
+from .props import Props
+from .transforms import transform_normals, transform_points
+
+KINDS = {
+    "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "twosided"},
+    "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
+    "emitter": {"area", "constant", "envmap"},
+    "sensor": {"perspective"},
+    "film": {"hdrfilm"},
+    "rfilter": {"box", "tent", "gaussian"},
+    "sampler": {"independent", "stratified", "multijitter", "orthogonal", "ldsampler"},
+    "integrator": {"path", "direct", "volpath", "path_guiding_integrator", "aov"},
+    "texture": {"bitmap"},
+}
+TYPE_TO_KIND = {t: k for k, ts in KINDS.items() for t in ts}
+
+# Mitsuba's named IORs (src/render/ior.h).
+IOR_TABLE = {
+    "vacuum": 1.0, "helium": 1.000036, "hydrogen": 1.000132, "air": 1.000277, "carbon dioxide": 1.00045,
+    "water": 1.3330, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
+    "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
+    "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
+    "amber": 1.55, "pet": 1.5750, "diamond": 2.419,
+}
+
+
+@dataclass
+class MaterialDesc:
+    kind: str
+    twosided: bool = False
+    reflectance: np.ndarray = field(default_factory=lambda: np.full(3, 0.5))
+    reflectance_tex: int = -1
+    specular_reflectance: np.ndarray = field(default_factory=lambda: np.ones(3))
+    specular_transmittance: np.ndarray = field(default_factory=lambda: np.ones(3))
+    eta: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    k: np.ndarray = field(default_factory=lambda: np.ones(3))
+    ior: float = 1.5046 / 1.000277
+    distribution: str = "beckmann"
+    alpha_u: float = 0.1
+    alpha_v: float = 0.1
+
+
+@dataclass
+class CameraDesc:
+    to_world: np.ndarray
+    fov: float
+    fov_axis: str
+    width: int
+    height: int
+    filter: str = "gaussian"
+    filter_radius: float = 2.0
+    filter_stddev: float = 0.5
+
+    def tan_half(self) -> tuple[float, float]:
+        aspect = self.width / self.height
+        t = math.tan(math.radians(self.fov) / 2)
+        axis = self.fov_axis
+        if axis == "smaller":
+            axis = "x" if self.width <= self.height else "y"
+        elif axis == "larger":
+            axis = "x" if self.width >= self.height else "y"
+        if axis == "x":
+            return t, t / aspect
+        if axis == "y":
+            return t * aspect, t
+        # diagonal: the fov spans the image diagonal
+        d = t / math.sqrt(1 + 1 / (aspect * aspect))
+        return d, d / aspect
+
+
+@dataclass
+class Scene:
+    name: str
+    positions: np.ndarray       # (T, 3, 3) float32, world space
+    normals: np.ndarray         # (T, 3, 3)
+    uvs: np.ndarray             # (T, 3, 2)
+    tri_smooth: np.ndarray      # (T,) int32
+    tri_material: np.ndarray    # (T,) int32
+    tri_emission: np.ndarray    # (T, 3)
+    materials: list[MaterialDesc]
+    camera: CameraDesc
+    spp: int = 16
+    max_depth: int = -1
+    rr_depth: int = 5
+    hide_emitters: bool = False
+    env_kind: str = "none"
+    env_radiance: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    env_to_world: np.ndarray = field(default_factory=lambda: np.eye(3))
+    env_image: np.ndarray | None = None
+    textures: list[np.ndarray] = field(default_factory=list)
+
+    @property
+    def num_triangles(self) -> int:
+        return len(self.positions)
+
+    def triangle_areas(self) -> np.ndarray:
+        p = self.positions.astype(np.float64)
+        return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+
+    def light_power(self) -> np.ndarray:
+        """Per-triangle emitted power up to the constant pi (luminance * area)."""
+        lum = self.tri_emission @ np.array([0.2126, 0.7152, 0.0722])
+        return np.maximum(lum, 0) * self.triangle_areas()
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        p = self.positions.reshape(-1, 3)
+        return p.min(0), p.max(0)
+
+
+# ----------------------------------------------------------------------------- builder
+class _Builder:
+    def __init__(self, tree: dict, name: str):
+        self.tree = tree
+        self.name = name
+        self.ids = tree.get("_ids", {})
+        self.base_dir = tree.get("_base_dir", os.getcwd())
+        self.materials: list[MaterialDesc] = []
+        self.material_index: dict[int, int] = {}
+        self.textures: list[np.ndarray] = []
+        self.parts: list[tuple] = []
+        self.env = None
+        self.camera = None
+        self.spp = 16
+        self.max_depth = -1
+        self.rr_depth = 5
+        self.hide_emitters = False
+
+    def props(self, obj: dict, kind: str) -> Props:
+        t = obj.get("type")
+        k = obj.get("_kind") or TYPE_TO_KIND.get(t)
+        loc = obj.get("_loc")
+        if k is None or t not in KINDS.get(k, ()):
+            raise SceneError(f"unsupported {kind} plugin type '{t}'", loc)
+        if k != kind:
+            raise SceneError(f"expected a {kind}, got a {k} of type '{t}'", loc)
+        return Props(obj, self.ids)
+
+    @staticmethod
+    def kind_of(obj: dict) -> str:
+        k = obj.get("_kind") or TYPE_TO_KIND.get(obj.get("type"))
+        if k is None:
+            raise SceneError(f"unsupported plugin type '{obj.get('type')}'", obj.get("_loc"))
+        return k
+
+    # --------------------------------------------------------------- top level
+    def build(self) -> Scene:
+        root = Props(self.tree, self.ids)
+        for obj in root.children():
+            kind = self.kind_of(obj)
+            if kind == "shape":
+                self.shape(obj)
+            elif kind == "emitter":
+                self.environment(obj)
+            elif kind == "sensor":
+                self.sensor(obj)
+            elif kind == "integrator":
+                self.integrator(obj)
+            elif kind in ("bsdf", "texture"):
+                pass  # declared with an id for reference; built when a shape uses it
+            else:
+                raise SceneError(f"a {kind} cannot appear at the top level", obj.get("_loc"))
+        if self.camera is None:
+            raise SceneError("the scene has no <sensor>", self.tree.get("_loc"))
+        if not self.parts:
+            raise SceneError("the scene has no shapes", self.tree.get("_loc"))
+        pos = np.concatenate([p[0] for p in self.parts]).astype(np.float32)
+        nrm = np.concatenate([p[1] for p in self.parts]).astype(np.float32)
+        uvs = np.concatenate([p[2] for p in self.parts]).astype(np.float32)
+        smooth = np.concatenate([np.full(len(p[0]), p[3], np.int32) for p in self.parts])
+        mat = np.concatenate([np.full(len(p[0]), p[4], np.int32) for p in self.parts])
+        emis = np.concatenate([np.tile(p[5], (len(p[0]), 1)) for p in self.parts]).astype(np.float32)
+        env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
+        return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
+                     self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
+                     env_kind, env_rad, env_rot, env_img, self.textures)
+
+    def integrator(self, obj):
+        p = self.props(obj, "integrator")
+        if p.type != "path":
+            warn(f"integrator '{p.type}' is rendered with restir's own methods (max_depth is kept)", p.loc)
+        self.max_depth = p.int("max_depth", -1)
+        self.rr_depth = p.int("rr_depth", 5)
+        self.hide_emitters = p.bool("hide_emitters", False)
+        if self.max_depth == 0 or self.max_depth < -1:
+            raise SceneError("max_depth must be -1 (unbounded) or >= 1", p.loc)
+        p.warn_unqueried()
+
+    def sensor(self, obj):
+        if self.camera is not None:
+            raise SceneError("only one <sensor> is supported", obj.get("_loc"))
+        p = self.props(obj, "sensor")
+        to_world = p.transform("to_world")
+        fov = p.float("fov", 0.0) if p.has("fov") else None
+        if fov is None:
+            raise SceneError("the perspective sensor needs 'fov' (focal_length is not supported)", p.loc)
+        if not 0 < fov < 180:
+            raise SceneError("fov must be in (0, 180) degrees", p.loc)
+        fov_axis = p.string("fov_axis", "x")
+        if fov_axis not in ("x", "y", "smaller", "larger", "diagonal"):
+            raise SceneError(f"unknown fov_axis '{fov_axis}'", p.loc)
+        for k in ("near_clip", "far_clip", "focus_distance"):
+            if p.has(k):
+                p.float(k)
+        width, height, filt = 768, 576, ("gaussian", 2.0, 0.5)
+        for child in p.children():
+            kind = self.kind_of(child)
+            if kind == "film":
+                width, height, filt = self.film(child)
+            elif kind == "sampler":
+                sp = self.props(child, "sampler")
+                self.spp = sp.int("sample_count", 4)
+                if sp.has("seed"):
+                    sp.int("seed")
+                if sp.type != "independent":
+                    warn(f"sampler '{sp.type}' is replaced by independent sampling", sp.loc)
+                for k in ("jitter", "scramble_type", "strength"):
+                    if sp.has(k):
+                        sp.queried.add(k)
+                sp.warn_unqueried()
+            else:
+                raise SceneError(f"a {kind} cannot be nested in a sensor", child.get("_loc"))
+        # Mitsuba's camera frame must not scale; strip any scale of the rotation part.
+        m = to_world.copy()
+        m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0, keepdims=True)
+        self.camera = CameraDesc(m, fov, fov_axis, width, height, *filt)
+        p.warn_unqueried()
+
+    def film(self, obj):
+        p = self.props(obj, "film")
+        w, h = p.int("width", 768), p.int("height", 576)
+        if w <= 0 or h <= 0:
+            raise SceneError("film width and height must be positive", p.loc)
+        for k in ("file_format", "pixel_format", "component_format"):
+            if p.has(k):
+                p.string(k)
+        for k in ("banner", "sample_border"):
+            if p.has(k):
+                p.bool(k)
+        filt = ("gaussian", 2.0, 0.5)
+        for child in p.children():
+            fp = self.props(child, "rfilter")
+            if fp.type == "box":
+                filt = ("box", fp.float("radius", 0.5), 0.5)
+            elif fp.type == "tent":
+                filt = ("tent", fp.float("radius", 1.0), 0.5)
+            else:
+                sd = fp.float("stddev", 0.5)
+                filt = ("gaussian", 4 * sd, sd)
+            if filt[1] <= 0:
+                raise SceneError("filter radius must be positive", fp.loc)
+            fp.warn_unqueried()
+        p.warn_unqueried()
+        return w, h, filt
+
+    # --------------------------------------------------------------- materials
+    def material(self, obj) -> int:
+        key = id(obj)
+        if key in self.material_index:
+            return self.material_index[key]
+        p = self.props(obj, "bsdf")
+        if p.type == "twosided":
+            inner = p.children()
+            if len(inner) != 1:
+                raise SceneError("twosided needs exactly one nested BSDF (two different sides are not supported)", p.loc)
+            m = self.material_desc(inner[0])
+            m.twosided = True
+        else:
+            m = self.material_desc(obj)
+        if p.type == "twosided":
+            p.warn_unqueried()
+        self.materials.append(m)
+        self.material_index[key] = len(self.materials) - 1
+        return self.material_index[key]
+
+    def ior(self, p: Props, name: str, default: float) -> float:
+        if not p.has(name):
+            return default
+        v = p.obj[name]
+        if isinstance(v, str):
+            p.queried.add(name)
+            if v.lower() not in IOR_TABLE:
+                raise SceneError(f"unknown IOR name '{v}'", p.loc)
+            return IOR_TABLE[v.lower()]
+        return p.float(name)
+
+    def material_desc(self, obj) -> MaterialDesc:
+        p = self.props(obj, "bsdf")
+        t = p.type
+        m = MaterialDesc(kind=t)
+        if t == "twosided":
+            raise SceneError("nested twosided BSDFs are not supported", p.loc)
+        if t == "diffuse":
+            r = p.color_or_texture("reflectance", np.full(3, 0.5))
+            if isinstance(r, dict):
+                m.reflectance_tex = self.texture(r)
+                m.reflectance = np.ones(3)
+            else:
+                m.reflectance = r
+        if t in ("conductor", "roughconductor"):
+            material = p.string("material", "none")
+            if p.has("eta") or material == "none":
+                m.eta = p.rgb("eta", np.zeros(3))
+                m.k = p.rgb("k", np.ones(3))
+            else:
+                raise SceneError(f"named conductor material '{material}' is not supported; give eta and k", p.loc)
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+        if t in ("dielectric", "thindielectric", "roughdielectric"):
+            int_ior = self.ior(p, "int_ior", 1.5046)
+            ext_ior = self.ior(p, "ext_ior", 1.000277)
+            if int_ior <= 0 or ext_ior <= 0:
+                raise SceneError("IORs must be positive", p.loc)
+            m.ior = int_ior / ext_ior
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+            m.specular_transmittance = p.rgb("specular_transmittance", np.ones(3))
+        if t in ("roughconductor", "roughdielectric"):
+            m.distribution = p.string("distribution", "beckmann")
+            if m.distribution not in ("beckmann", "ggx"):
+                raise SceneError(f"unknown microfacet distribution '{m.distribution}'", p.loc)
+            if p.has("alpha_u") or p.has("alpha_v"):
+                m.alpha_u, m.alpha_v = p.float("alpha_u"), p.float("alpha_v")
+            else:
+                m.alpha_u = m.alpha_v = p.float("alpha", 0.1)
+            if min(m.alpha_u, m.alpha_v) <= 0:
+                raise SceneError("roughness alpha must be positive", p.loc)
+            # Mitsuba clamps alpha from below to avoid numerical trouble (1e-4).
+            m.alpha_u, m.alpha_v = max(m.alpha_u, 1e-4), max(m.alpha_v, 1e-4)
+            if p.has("sample_visible"):
+                p.bool("sample_visible")
+        p.warn_unqueried()
+        return m
+
+    def texture(self, obj) -> int:
+        p = self.props(obj, "texture")
+        from ..image_io import read_image
+
+        fname = p.string("filename")
+        path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+        if not os.path.exists(path):
+            raise SceneError(f"texture file '{fname}' not found", p.loc)
+        img = read_image(path, linearize_srgb=not p.bool("raw", False))
+        for k in ("filter_type", "wrap_mode"):
+            if p.has(k):
+                p.string(k)
+        p.warn_unqueried()
+        self.textures.append(img)
+        return len(self.textures) - 1
+
+    # --------------------------------------------------------------- shapes and emitters
+    def shape(self, obj):
+        p = self.props(obj, "shape")
+        t = p.type
+        to_world = p.transform("to_world")
+        if t == "sphere":
+            center = p.vec3("center", np.zeros(3))
+            radius = p.float("radius", 1.0)
+            if radius <= 0:
+                raise SceneError("sphere radius must be positive", p.loc)
+            m = np.diag([radius, radius, radius, 1.0])
+            m[:3, 3] = center
+            to_world = to_world @ m
+            seg = int(p.int("segments", 0)) if p.has("segments") else 0
+            mesh = shape_lib.sphere((2 * seg, seg)) if seg else shape_lib.sphere()
+        elif t == "rectangle":
+            mesh = shape_lib.rectangle()
+        elif t == "cube":
+            mesh = shape_lib.cube()
+        elif t == "disk":
+            mesh = shape_lib.disk()
+        elif t == "trimesh":  # restir extension for builtin scenes: inline vertices and faces
+            mesh = shape_lib.TriMesh(np.asarray(p.obj["vertices"], float)[np.asarray(p.obj["faces"])], None,
+                                     np.zeros((len(p.obj["faces"]), 3, 2)))
+            p.queried.update(("vertices", "faces"))
+
+        else:
+            fname = p.string("filename")
+            path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+            if not os.path.exists(path):
+                raise SceneError(f"mesh file '{fname}' not found", p.loc)
+            mesh = shape_lib.load_obj(path, p.loc) if t == "obj" else shape_lib.load_ply(path, p.loc)
+        face_normals = p.bool("face_normals", False) if t in ("obj", "ply") else False
+        flip = p.bool("flip_normals", False)
+        bsdf_obj, emitter_obj = None, None
+        for child in p.children():
+            kind = self.kind_of(child)
+            if kind == "bsdf":
+                bsdf_obj = child
+            elif kind == "emitter":
+                emitter_obj = child
+            else:
+                raise SceneError(f"a {kind} cannot be nested in a shape", child.get("_loc"))
+        if bsdf_obj is None:
+            bsdf_obj = {"type": "diffuse", "_kind": "bsdf", "_loc": p.loc}
+        mat = self.material(bsdf_obj)
+        emission = np.zeros(3)
+        if emitter_obj is not None:
+            ep = self.props(emitter_obj, "emitter")
+            if ep.type != "area":
+                raise SceneError(f"a '{ep.type}' emitter cannot be attached to a shape", ep.loc)
+            emission = ep.rgb("radiance")
+            if np.any(emission < 0):
+                raise SceneError("radiance must be non-negative", ep.loc)
+            ep.warn_unqueried()
+        pos = transform_points(to_world, mesh.positions.reshape(-1, 3)).reshape(-1, 3, 3)
+        nrm = transform_normals(to_world, mesh.normals.reshape(-1, 3)).reshape(-1, 3, 3) if mesh.normals is not None else None
+        uvs = mesh.uvs
+        analytic = t in ("rectangle", "disk", "sphere", "trimesh")
+        if analytic and np.linalg.det(to_world[:3, :3]) < 0:
+            # Mitsuba's analytic shapes keep their normal under mirroring transforms.
+            pos, nrm, uvs = pos[:, ::-1], nrm[:, ::-1], uvs[:, ::-1]
+        if flip:
+            pos, uvs = pos[:, ::-1], uvs[:, ::-1]
+            nrm = -nrm[:, ::-1] if nrm is not None else None
+        smooth = 0 if (face_normals or nrm is None or t in ("rectangle", "disk", "trimesh")) else 1
+        if nrm is None:
+            nrm = np.zeros_like(pos)
+        area = 0.5 * np.linalg.norm(np.cross(pos[:, 1] - pos[:, 0], pos[:, 2] - pos[:, 0]), axis=1)
+        keep = area > 0
+        pos, nrm, uvs = pos[keep], nrm[keep], uvs[keep]
+        p.warn_unqueried()
+        if len(pos):
+            self.parts.append((pos, nrm, uvs, smooth, mat, emission))
+
+    def environment(self, obj):
+        p = self.props(obj, "emitter")
+        if p.type == "area":
+            raise SceneError("an area emitter must be nested in a shape", p.loc)
+        if self.env is not None:
+            raise SceneError("only one environment emitter is supported", p.loc)
+        rot = p.transform("to_world")[:3, :3]
+        if p.type == "constant":
+            self.env = ("constant", p.rgb("radiance", np.ones(3)), rot, None)
+        else:
+            from ..image_io import read_image
+
+            fname = p.string("filename")
+            path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+            if not os.path.exists(path):
+                raise SceneError(f"environment map '{fname}' not found", p.loc)
+            img = read_image(path, linearize_srgb=True)
+            if not np.all(np.isfinite(img)):
+                raise SceneError(f"environment map '{fname}' contains NaN or inf", p.loc)
+            self.env = ("envmap", np.full(3, p.float("scale", 1.0)), rot, img)
+        p.warn_unqueried()
+
+
+def build_scene(tree: dict, name: str = "scene") -> Scene:
+    """Build a host Scene from a Mitsuba-style scene dict."""
+    return _Builder(tree, name).build()

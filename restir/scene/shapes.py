@@ -1,0 +1,203 @@
+"""Triangle meshes for every supported shape, as un-indexed corner arrays.
+
+A `TriMesh` holds positions (T,3,3), normals (T,3,3) or None (flat shading) and uvs (T,3,2)
+in object space. Analytic shapes (disk, sphere) are tessellated with their radius scaled so
+the surface area, and so an emitter's power, is exactly that of the analytic shape.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SceneError
+
+SPHERE_SEGMENTS = (128, 64)   # (phi, theta)
+DISK_SEGMENTS = 128
+
+
+@dataclass
+class TriMesh:
+    positions: np.ndarray
+    normals: np.ndarray | None
+    uvs: np.ndarray
+
+
+def _from_indexed(v, f, n=None, uv=None) -> TriMesh:
+    f = np.asarray(f, np.int64)
+    pos = np.asarray(v, np.float64)[f]
+    nrm = None if n is None else np.asarray(n, np.float64)[f]
+    if uv is None:
+        uvs = np.zeros((len(f), 3, 2))
+    else:
+        uvs = np.asarray(uv, np.float64)[f]
+    return TriMesh(pos, nrm, uvs)
+
+
+def rectangle() -> TriMesh:
+    v = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]
+    uv = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    f = [[0, 1, 2], [2, 3, 0]]
+    return _from_indexed(v, f, [[0, 0, 1]] * 4, uv)
+
+
+def cube() -> TriMesh:
+    verts, norms, uvs, faces = [], [], [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            n = np.zeros(3)
+            n[axis] = sign
+            a, b = [i for i in range(3) if i != axis]
+            base = len(verts)
+            for (s, t) in [(-1, -1), (1, -1), (1, 1), (-1, 1)]:
+                p = np.zeros(3)
+                p[axis], p[a], p[b] = sign, s, t
+                verts.append(p)
+                norms.append(n)
+                uvs.append([(s + 1) / 2, (t + 1) / 2])
+            quad = [[base, base + 1, base + 2], [base, base + 2, base + 3]]
+            # orient each face's winding outward
+            p0, p1, p2 = (verts[i] for i in quad[0])
+            if np.dot(np.cross(p1 - p0, p2 - p0), n) < 0:
+                quad = [[q[0], q[2], q[1]] for q in quad]
+            faces += quad
+    return _from_indexed(verts, faces, norms, uvs)
+
+
+def disk(segments: int = DISK_SEGMENTS) -> TriMesh:
+    phi = np.linspace(0, 2 * np.pi, segments + 1)[:-1]
+    # A regular polygon of circumradius r has area (n/2) r^2 sin(2 pi/n): match pi.
+    r = np.sqrt(np.pi / (0.5 * segments * np.sin(2 * np.pi / segments)))
+    ring = np.stack([r * np.cos(phi), r * np.sin(phi), np.zeros_like(phi)], 1)
+    v = np.vstack([[0, 0, 0], ring])
+    f = [[0, 1 + i, 1 + (i + 1) % segments] for i in range(segments)]
+    uv = np.vstack([[0, 0], np.stack([np.ones_like(phi), phi / (2 * np.pi)], 1)])
+    return _from_indexed(v, f, [[0, 0, 1]] * len(v), uv)
+
+
+def sphere(segments=SPHERE_SEGMENTS) -> TriMesh:
+    n_phi, n_theta = segments
+    th = np.linspace(0, np.pi, n_theta + 1)
+    ph = np.linspace(0, 2 * np.pi, n_phi + 1)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    dirs = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
+    uv = np.stack([P / (2 * np.pi), T / np.pi], -1).reshape(-1, 2)
+    idx = lambda i, j: i * (n_phi + 1) + j  # noqa: E731
+    f = []
+    for i in range(n_theta):
+        for j in range(n_phi):
+            a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+            if i > 0:
+                f.append([a, b, d])
+            if i < n_theta - 1:
+                f.append([b, c, d])
+    m = _from_indexed(dirs, f, dirs, uv)
+    # Outward winding, and area scaled to 4 pi.
+    e = np.cross(m.positions[:, 1] - m.positions[:, 0], m.positions[:, 2] - m.positions[:, 0])
+    if np.sum(np.einsum("ij,ij->i", e, m.positions.mean(1))) < 0:
+        m.positions = m.positions[:, ::-1]
+        m.normals = m.normals[:, ::-1]
+        m.uvs = m.uvs[:, ::-1]
+        e = -e
+    area = 0.5 * np.linalg.norm(e, axis=1).sum()
+    m.positions *= np.sqrt(4 * np.pi / area)
+    return m
+
+
+def load_obj(path: str, loc: str) -> TriMesh:
+    """Wavefront OBJ: v/vt/vn, polygons fan-triangulated, negative (relative) indices.
+
+    As Mitsuba does, texture v is flipped (1 - v) so that images are not upside down.
+    """
+    v, vt, vn = [], [], []
+    fv, ft, fn = [], [], []
+    try:
+        f = open(path, "r", errors="replace")
+    except OSError as e:
+        raise SceneError(f"cannot open mesh '{path}': {e.strerror}", loc) from None
+    with f:
+        for lineno, line in enumerate(f, 1):
+            parts = line.split()
+            if not parts:
+                continue
+            key = parts[0]
+            try:
+                if key == "v":
+                    v.append([float(x) for x in parts[1:4]])
+                elif key == "vt":
+                    vt.append([float(parts[1]), 1.0 - float(parts[2]) if len(parts) > 2 else 0.0])
+                elif key == "vn":
+                    vn.append([float(x) for x in parts[1:4]])
+                elif key == "f":
+                    corners = []
+                    for c in parts[1:]:
+                        ids = c.split("/")
+                        trip = []
+                        for k, count in enumerate((len(v), len(vt), len(vn))):
+                            if k < len(ids) and ids[k]:
+                                i = int(ids[k])
+                                i = i - 1 if i > 0 else count + i
+                                if not 0 <= i < count:
+                                    raise SceneError(f"index {ids[k]} out of range", f"{path}:{lineno}")
+                                trip.append(i)
+                            else:
+                                trip.append(-1)
+                        corners.append(trip)
+                    for k in range(1, len(corners) - 1):
+                        tri = [corners[0], corners[k], corners[k + 1]]
+                        fv.append([c[0] for c in tri])
+                        ft.append([c[1] for c in tri])
+                        fn.append([c[2] for c in tri])
+            except (ValueError, IndexError):
+                raise SceneError(f"cannot parse OBJ line: {line.strip()}", f"{path}:{lineno}") from None
+    if not fv:
+        raise SceneError(f"mesh '{path}' has no faces", loc)
+    fv, ft, fn = np.array(fv), np.array(ft), np.array(fn)
+    pos = np.asarray(v, np.float64)[fv]
+    nrm = np.asarray(vn, np.float64)[fn] if len(vn) and (fn >= 0).all() else None
+    uvs = np.asarray(vt, np.float64)[ft] if len(vt) and (ft >= 0).all() else np.zeros((len(fv), 3, 2))
+    if nrm is None:
+        nrm = smooth_normals(np.asarray(v, np.float64), fv)
+    return TriMesh(pos, nrm, uvs)
+
+
+def load_ply(path: str, loc: str) -> TriMesh:
+    try:
+        from plyfile import PlyData
+
+        ply = PlyData.read(path)
+    except OSError as e:
+        raise SceneError(f"cannot open mesh '{path}': {e.strerror}", loc) from None
+    except Exception as e:  # plyfile raises several exception types for bad files
+        raise SceneError(f"cannot parse PLY '{path}': {e}", loc) from None
+    vert = ply["vertex"]
+    names = vert.data.dtype.names
+    v = np.stack([vert["x"], vert["y"], vert["z"]], 1).astype(np.float64)
+    faces = []
+    for face in ply["face"].data[ply["face"].data.dtype.names[0]]:
+        for k in range(1, len(face) - 1):
+            faces.append([face[0], face[k], face[k + 1]])
+    f = np.array(faces, np.int64)
+    n = np.stack([vert["nx"], vert["ny"], vert["nz"]], 1) if "nx" in names else None
+    uv = None
+    for a, b in (("u", "v"), ("s", "t"), ("texture_u", "texture_v")):
+        if a in names:
+            uv = np.stack([vert[a], vert[b]], 1)
+    mesh = _from_indexed(v, f, n, uv)
+    if mesh.normals is None:
+        mesh.normals = smooth_normals(v, f)
+    return mesh
+
+
+def smooth_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Angle-weighted vertex normals (for meshes that come without any)."""
+    p = v[f]
+    acc = np.zeros_like(v)
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-30)
+    for c in range(3):
+        e1 = p[:, (c + 1) % 3] - p[:, c]
+        e2 = p[:, (c + 2) % 3] - p[:, c]
+        cosang = np.einsum("ij,ij->i", e1, e2) / np.maximum(np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1), 1e-30)
+        ang = np.arccos(np.clip(cosang, -1, 1))
+        np.add.at(acc, f[:, c], fn * ang[:, None])
+    acc /= np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-30)
+    return acc[f]

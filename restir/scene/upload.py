@@ -1,0 +1,140 @@
+"""Host Scene -> device structs (SceneDevice, Camera). Keeps the Warp arrays alive."""
+import numpy as np
+import warp as wp
+
+from ..device.bsdf import Material
+from ..device.camera import Camera
+from ..device.scene_device import SceneDevice
+from ..device.types import (ENV_CONSTANT, ENV_MAP, ENV_NONE, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT,
+                            MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
+                            MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
+from .light_tables import alias_table, cdf_1d, env_tables
+from .scene import Scene
+
+MATERIAL_KIND = {
+    "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
+    "dielectric": MAT_DIELECTRIC, "thindielectric": MAT_THINDIELECTRIC, "roughdielectric": MAT_ROUGHDIELECTRIC,
+}
+FILTER_KIND = {"box": FILTER_BOX, "tent": FILTER_TENT, "gaussian": FILTER_GAUSSIAN}
+FILTER_TABLE_BINS = 256
+
+
+def material_struct(m) -> Material:
+    s = Material()
+    s.kind = int(MATERIAL_KIND[m.kind])
+    s.twosided = int(m.twosided)
+    s.reflectance = wp.vec3(*m.reflectance)
+    s.reflectance_tex = int(m.reflectance_tex)
+    s.specular_reflectance = wp.vec3(*m.specular_reflectance)
+    s.specular_transmittance = wp.vec3(*m.specular_transmittance)
+    s.eta = wp.vec3(*m.eta)
+    s.k = wp.vec3(*m.k)
+    s.ior = float(m.ior)
+    s.distribution = int(MICROFACET_GGX if m.distribution == "ggx" else MICROFACET_BECKMANN)
+    s.alpha_u = float(m.alpha_u)
+    s.alpha_v = float(m.alpha_v)
+    return s
+
+
+class DeviceScene:
+    """Owns every device array of one scene; `.scene` and `.camera` are the kernel arguments."""
+
+    def __init__(self, scene: Scene, device: str = "cpu"):
+        self.host = scene
+        self.device = device
+        self._arrays = []
+        self.scene = self._scene_struct(scene)
+        self.camera = self.camera_struct(scene.camera)
+
+    def _arr(self, data, dtype):
+        a = wp.array(data, dtype=dtype, device=self.device)
+        self._arrays.append(a)
+        return a
+
+    def _scene_struct(self, sc: Scene) -> SceneDevice:
+        s = SceneDevice()
+        pts = sc.positions.reshape(-1, 3).astype(np.float32)
+        self.mesh = wp.Mesh(points=self._arr(pts, wp.vec3),
+                            indices=self._arr(np.arange(len(pts), dtype=np.int32), wp.int32))
+        s.mesh = self.mesh.id
+        s.positions = self.mesh.points
+        s.normals = self._arr(sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
+        s.uvs = self._arr(sc.uvs.reshape(-1, 2).astype(np.float32), wp.vec2)
+        s.tri_smooth = self._arr(sc.tri_smooth.astype(np.int32), wp.int32)
+        s.tri_material = self._arr(sc.tri_material.astype(np.int32), wp.int32)
+        s.tri_emission = self._arr(sc.tri_emission.astype(np.float32), wp.vec3)
+        s.materials = wp.array([material_struct(m) for m in sc.materials], dtype=Material, device=self.device)
+        self._arrays.append(s.materials)
+
+        power = sc.light_power()
+        lights = np.nonzero(power > 0)[0].astype(np.int32)
+        tri_pdf = np.zeros(sc.num_triangles, np.float32)
+        if len(lights):
+            prob, alias, pmf = alias_table(power[lights])
+            tri_pdf[lights] = pmf / sc.triangle_areas()[lights]
+        else:
+            prob, alias = np.ones(1, np.float32), np.zeros(1, np.int32)
+        s.light_tri = self._arr(lights if len(lights) else np.zeros(1, np.int32), wp.int32)
+        s.light_prob = self._arr(prob, float)
+        s.light_alias = self._arr(alias, wp.int32)
+        s.num_tri_lights = int(len(lights))
+        s.tri_light_pdf = self._arr(tri_pdf, float)
+
+        s.env_kind = int({"none": ENV_NONE, "constant": ENV_CONSTANT, "envmap": ENV_MAP}[sc.env_kind])
+        s.env_radiance = wp.vec3(*sc.env_radiance)
+        rot = np.asarray(sc.env_to_world, np.float64)
+        s.env_to_world = wp.mat33(*rot.astype(np.float32).reshape(-1))
+        s.env_to_local = wp.mat33(*np.linalg.inv(rot).astype(np.float32).reshape(-1))
+        if sc.env_kind == "envmap":
+            img = sc.env_image.astype(np.float32)
+            h, w = img.shape[:2]
+            marginal, cond, _ = env_tables(img @ np.array([0.2126, 0.7152, 0.0722], np.float32))
+            s.env_width, s.env_height = w, h
+            s.env_pixels = self._arr(img.reshape(-1, 3), wp.vec3)
+            s.env_marginal_cdf = self._arr(marginal, float)
+            s.env_conditional_cdf = self._arr(cond, float)
+        else:
+            s.env_width = s.env_height = 1
+            s.env_pixels = self._arr(np.zeros((1, 3), np.float32), wp.vec3)
+            s.env_marginal_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
+            s.env_conditional_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
+        s.env_pdf_norm = 1.0
+        has_env = sc.env_kind != "none"
+        s.env_select_prob = float(1.0 if has_env and not len(lights) else (0.5 if has_env else 0.0))
+
+        texels, offsets, widths, heights = [np.zeros((1, 3), np.float32)], [], [], []
+        off = 1
+        for t in sc.textures:
+            offsets.append(off)
+            heights.append(t.shape[0])
+            widths.append(t.shape[1])
+            texels.append(t.reshape(-1, 3).astype(np.float32))
+            off += t.shape[0] * t.shape[1]
+        s.tex_pixels = self._arr(np.concatenate(texels), wp.vec3)
+        s.tex_offset = self._arr(np.array(offsets or [0], np.int32), wp.int32)
+        s.tex_width = self._arr(np.array(widths or [1], np.int32), wp.int32)
+        s.tex_height = self._arr(np.array(heights or [1], np.int32), wp.int32)
+        return s
+
+    def camera_struct(self, cd) -> Camera:
+        c = Camera()
+        c.to_world = wp.mat44(*cd.to_world.astype(np.float32).reshape(-1))
+        tx, ty = cd.tan_half()
+        c.tan_half_x, c.tan_half_y = float(tx), float(ty)
+        c.width, c.height = int(cd.width), int(cd.height)
+        c.filter = int(FILTER_KIND[cd.filter])
+        c.filter_radius = float(cd.filter_radius)
+        c.filter_stddev = float(cd.filter_stddev)
+        n = FILTER_TABLE_BINS
+        x = np.linspace(-cd.filter_radius, cd.filter_radius, 16 * n + 1)
+        a = -1.0 / (2 * cd.filter_stddev ** 2)
+        f = np.maximum(0.0, np.exp(a * x * x) - np.exp(a * cd.filter_radius ** 2))
+        fine = 0.5 * (f[1:] + f[:-1]) * (x[1] - x[0])            # trapezoid per fine cell
+        bins = fine.reshape(n, 16).sum(1)
+        c.filter_cdf = self._arr(cdf_1d(bins).astype(np.float32), float)
+        c.filter_bins = n
+        c.filter_inv_integral = float(1.0 / bins.sum())
+        return c
+
+    def memory_bytes(self) -> int:
+        return sum(a.capacity for a in self._arrays) + self.mesh.points.capacity
