@@ -1,0 +1,175 @@
+"""BSDF sampling against its pdf (chi-square), consistency of sample/pdf/eval, Fresnel, delta lobes.
+
+Each chi-square test has alpha = 1e-3. The pdf is integrated per bin by a midpoint rule on an
+8x8 sub-grid; lobes are kept wide enough (alpha >= 0.1) for that to be accurate.
+"""
+import numpy as np
+import pytest
+import warp as wp
+
+from restir.device.bsdf import Material, bsdf_eval, bsdf_pdf, bsdf_sample
+from restir.device.fresnel import fresnel_conductor, fresnel_dielectric
+from restir.device.rng import rng_key, rng_uniform, rng_uniform2
+from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
+                                 MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
+from tests.stats import chi2_test, expected_counts, histogram_directions, integration_points
+
+ALPHA = 1e-3
+N = 1_000_000
+NT, NP, SUB = 40, 80, 8
+
+
+def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
+    m = Material()
+    m.kind = int(kind)
+    m.twosided = twosided
+    m.reflectance = wp.vec3(0.8, 0.5, 0.2)
+    m.reflectance_tex = -1
+    m.specular_reflectance = wp.vec3(1.0, 0.9, 0.8)
+    m.specular_transmittance = wp.vec3(1.0, 1.0, 1.0)
+    m.eta = wp.vec3(0.2, 0.92, 1.1)
+    m.k = wp.vec3(3.9, 2.45, 2.14)
+    m.ior = ior
+    m.distribution = int(dist)
+    m.alpha_u, m.alpha_v = alpha
+    return m
+
+
+@wp.kernel
+def sample_kernel(mat: Material, wi: wp.vec3, seed: wp.uint32, wo: wp.array(dtype=wp.vec3),
+                  weight: wp.array(dtype=wp.vec3), pdf: wp.array(dtype=float), valid: wp.array(dtype=wp.int32),
+                  pdf_check: wp.array(dtype=float), eval_check: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    key = rng_key(seed, wp.uint32(0), wp.uint32(0), wp.uint32(i))
+    s = bsdf_sample(mat, wi, rng_uniform(key, wp.uint32(0)), rng_uniform2(key, wp.uint32(1)))
+    wo[i] = s.wo
+    weight[i] = s.weight
+    pdf[i] = s.pdf
+    valid[i] = s.valid
+    pdf_check[i] = bsdf_pdf(mat, wi, s.wo)
+    eval_check[i] = bsdf_eval(mat, wi, s.wo)
+
+
+@wp.kernel
+def pdf_kernel(mat: Material, wi: wp.vec3, dirs: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+    i = wp.tid()
+    out[i] = bsdf_pdf(mat, wi, dirs[i])
+
+
+def run_sampler(mat, wi, n=N, seed=1):
+    arrs = [wp.zeros(n, dtype=t, device="cpu") for t in (wp.vec3, wp.vec3, float, wp.int32, float, wp.vec3)]
+    wp.launch(sample_kernel, dim=n, inputs=[mat, wp.vec3(*wi), wp.uint32(seed), *arrs], device="cpu")
+    return [a.numpy() for a in arrs]
+
+
+def direction(theta_deg, phi_deg=30.0, below=False):
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    v = np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+    if below:
+        v[2] = -v[2]
+    return v.astype(np.float32)
+
+
+SMOOTH_CASES = [
+    ("diffuse", material(MAT_DIFFUSE), direction(40)),
+    ("diffuse-twosided-back", material(MAT_DIFFUSE, twosided=1), direction(40, below=True)),
+    ("beckmann-0.1", material(MAT_ROUGHCONDUCTOR, (0.1, 0.1), MICROFACET_BECKMANN), direction(30)),
+    ("beckmann-0.4-grazing", material(MAT_ROUGHCONDUCTOR, (0.4, 0.4), MICROFACET_BECKMANN), direction(80)),
+    ("beckmann-aniso", material(MAT_ROUGHCONDUCTOR, (0.3, 0.1), MICROFACET_BECKMANN), direction(45)),
+    ("ggx-0.1", material(MAT_ROUGHCONDUCTOR, (0.1, 0.1)), direction(30)),
+    ("ggx-0.5-grazing", material(MAT_ROUGHCONDUCTOR, (0.5, 0.5)), direction(85)),
+    ("ggx-aniso", material(MAT_ROUGHCONDUCTOR, (0.1, 0.35)), direction(50)),
+    ("roughdielectric-ggx-outside", material(MAT_ROUGHDIELECTRIC, (0.3, 0.3)), direction(35)),
+    ("roughdielectric-ggx-inside", material(MAT_ROUGHDIELECTRIC, (0.3, 0.3)), direction(25, below=True)),
+    ("roughdielectric-ggx-inside-tir", material(MAT_ROUGHDIELECTRIC, (0.2, 0.2)), direction(60, below=True)),
+    ("roughdielectric-beckmann", material(MAT_ROUGHDIELECTRIC, (0.25, 0.25), MICROFACET_BECKMANN, ior=1.33), direction(55)),
+]
+
+
+@pytest.mark.parametrize("name,mat,wi", SMOOTH_CASES, ids=[c[0] for c in SMOOTH_CASES])
+def test_sampling_matches_pdf(name, mat, wi):
+    wo, weight, pdf, valid, pdf_check, eval_check = run_sampler(mat, wi)
+    ok = valid == 1
+    # the pdf a sample reports is the pdf function's value, and weight = eval / pdf
+    np.testing.assert_allclose(pdf[ok], pdf_check[ok], rtol=2e-3, atol=1e-6)
+    np.testing.assert_allclose(weight[ok] * pdf[ok, None], eval_check[ok], rtol=2e-3, atol=1e-5)
+    # histogram of sampled directions against the pdf integrated over each bin
+    pts = integration_points(NT, NP, SUB).reshape(-1, 3).astype(np.float32)
+    out = wp.zeros(len(pts), dtype=float, device="cpu")
+    wp.launch(pdf_kernel, dim=len(pts), inputs=[mat, wp.vec3(*wi), wp.array(pts, dtype=wp.vec3, device="cpu"), out], device="cpu")
+    expected = expected_counts(out.numpy(), NT, NP, SUB, N)
+    observed = histogram_directions(wo[ok], NT, NP)
+    p, stat, dof = chi2_test(observed, expected)
+    assert p > ALPHA, f"{name}: chi2={stat:.1f} dof={dof} p={p:.2e}"
+    # the pdf integrates to the probability that sampling succeeds
+    frac = ok.mean()
+    assert abs(expected.sum() / N - frac) < 0.01 + 5 * np.sqrt(frac * (1 - frac) / N), (expected.sum() / N, frac)
+
+
+def fresnel_reference(cos_i, n_complex):
+    """Unpolarized Fresnel reflectance of a (possibly absorbing) interface, from complex amplitudes."""
+    sin2 = 1 - cos_i ** 2
+    cos_t = np.sqrt(1 - sin2 / n_complex ** 2 + 0j)
+    rs = (cos_i - n_complex * cos_t) / (cos_i + n_complex * cos_t)
+    rp = (n_complex * cos_i - cos_t) / (n_complex * cos_i + cos_t)
+    return 0.5 * (abs(rs) ** 2 + abs(rp) ** 2)
+
+
+@wp.kernel
+def fresnel_kernel(cos_i: wp.array(dtype=float), eta: float, eta_c: wp.vec3, k_c: wp.vec3,
+                   r_diel: wp.array(dtype=float), r_cond: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    r_diel[i] = fresnel_dielectric(cos_i[i], eta).r
+    r_cond[i] = fresnel_conductor(cos_i[i], eta_c, k_c)
+
+
+def test_fresnel_against_complex_reference():
+    c = np.linspace(-1, 1, 2001).astype(np.float32)
+    c = c[c != 0]
+    rd = wp.zeros(len(c), dtype=float, device="cpu")
+    rc = wp.zeros(len(c), dtype=wp.vec3, device="cpu")
+    eta_c, k_c = (0.2, 0.92, 1.1), (3.9, 2.45, 2.14)
+    wp.launch(fresnel_kernel, dim=len(c), inputs=[wp.array(c, device="cpu"), 1.5, wp.vec3(*eta_c), wp.vec3(*k_c), rd, rc], device="cpu")
+    ref_d = np.where(c > 0, fresnel_reference(np.abs(c), 1.5), fresnel_reference(np.abs(c), 1 / 1.5))
+    np.testing.assert_allclose(rd.numpy(), ref_d, atol=2e-5)
+    for ch in range(3):
+        ref_c = fresnel_reference(np.abs(c), eta_c[ch] + 1j * k_c[ch])
+        np.testing.assert_allclose(rc.numpy()[:, ch], ref_c, atol=2e-5)
+
+
+@pytest.mark.parametrize("below", [False, True])
+def test_smooth_dielectric_lobes(below):
+    wi = direction(30 if below else 50, below=below)  # inside: below the 41.8 deg critical angle
+    wo, weight, pdf, valid, _, _ = run_sampler(material(MAT_DIELECTRIC), wi, n=200_000)
+    assert valid.all()
+    refl = np.sign(wo[:, 2]) == np.sign(wi[2])
+    eta = 1.5 if not below else 1 / 1.5
+    F = fresnel_reference(abs(wi[2]), eta)
+    se = np.sqrt(F * (1 - F) / len(wo))
+    assert abs(refl.mean() - F) < 4.5 * se
+    # reflection mirrors wi; refraction obeys Snell's law with radiance scaled by 1/eta^2
+    np.testing.assert_allclose(wo[refl], np.tile([-wi[0], -wi[1], wi[2]], (refl.sum(), 1)), atol=1e-6)
+    sin_t = np.linalg.norm(wo[~refl, :2], axis=1)
+    np.testing.assert_allclose(sin_t, np.linalg.norm(wi[:2]) / eta, rtol=1e-4)
+    np.testing.assert_allclose(weight[~refl, 0], 1 / eta ** 2, rtol=1e-5)
+    np.testing.assert_allclose(pdf[refl], F, rtol=1e-4)
+
+
+def test_thin_dielectric_and_conductor():
+    wi = direction(60)
+    wo, weight, pdf, valid, _, _ = run_sampler(material(MAT_THINDIELECTRIC), wi, n=200_000)
+    R = fresnel_reference(wi[2], 1.5)
+    R2 = R + (1 - R) ** 2 * R / (1 - R * R)
+    refl = wo[:, 2] > 0
+    assert abs(refl.mean() - R2) < 4.5 * np.sqrt(R2 * (1 - R2) / len(wo))
+    np.testing.assert_allclose(wo[~refl], -np.tile(wi, ((~refl).sum(), 1)), atol=1e-6)
+    wo, weight, pdf, valid, _, _ = run_sampler(material(MAT_CONDUCTOR), wi, n=1000)
+    ref = [fresnel_reference(wi[2], e + 1j * k) * s for e, k, s in zip((0.2, 0.92, 1.1), (3.9, 2.45, 2.14), (1.0, 0.9, 0.8))]
+    np.testing.assert_allclose(weight[0], ref, rtol=1e-4)
+
+
+def test_one_sided_is_black_from_behind():
+    wi = direction(40, below=True)
+    for kind in (MAT_DIFFUSE, MAT_ROUGHCONDUCTOR):
+        _, weight, _, valid, _, _ = run_sampler(material(kind), wi, n=1000)
+        assert not valid.any() and not weight.any()
