@@ -33,14 +33,67 @@ def load_scene(spec: str, defines: dict[str, str] | None = None, **builtin_args)
 @dataclass
 class RenderResult:
     image: np.ndarray       # (H, W, 3) mean of all samples
-    m2: np.ndarray          # (H, W, 3) mean of squared samples (per-sample variance = m2 - image^2)
+    sample_var: np.ndarray  # (H, W, 3) population variance of the samples (float64)
     samples: int            # samples per pixel in total (spp * frames)
     stats: dict
+    frame_sums: np.ndarray | None = None  # (4, H, W, 3): sums of frame means^1..^4 (float64)
+
+    @property
+    def frames(self) -> int:
+        return self.stats["frames"]
+
+    @property
+    def batch_variance_of_mean(self) -> np.ndarray:
+        """Variance of `image` estimated from the spread of the frame means (frames >= 2).
+
+        Robust where single samples are heavy-tailed: each frame mean averages spp samples.
+        """
+        f = self.frames
+        if f < 2:
+            raise ValueError("batch statistics need at least 2 frames")
+        s1, s2 = self.frame_sums[0], self.frame_sums[1]
+        return np.maximum(s2 - s1 * s1 / f, 0.0) / (f - 1) / f
+
+    @property
+    def batch_skewness(self) -> np.ndarray:
+        """Per-pixel skewness of the frame means (heavy tails make z-tests unreliable)."""
+        s1, s2, s3, _ = (x / self.frames for x in self.frame_sums)
+        var = np.maximum(s2 - s1 * s1, 0.0)
+        m3 = s3 - 3 * s1 * s2 + 2 * s1 ** 3
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(var > 0, m3 / var ** 1.5, 0.0)
+
+    @property
+    def batch_excess_kurtosis(self) -> np.ndarray:
+        """Per-pixel excess kurtosis of the frame means (0 for normal batch means)."""
+        s1, s2, s3, s4 = (x / self.frames for x in self.frame_sums)
+        var = np.maximum(s2 - s1 * s1, 0.0)
+        m4 = s4 - 4 * s1 * s3 + 6 * s1 * s1 * s2 - 3 * s1 ** 4
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
 
     @property
     def variance_of_mean(self) -> np.ndarray:
+        """Unbiased estimate of the variance of `image` (samples of one pixel are independent for PT)."""
         n = self.samples
-        return np.maximum(self.m2 - self.image.astype(np.float64) ** 2, 0.0) * n / max(n - 1, 1) / n
+        return self.sample_var / max(n - 1, 1)
+
+
+class _PixelMoments:
+    """Combines per-frame (mean, variance) of equal sample counts in float64 (Chan et al.)."""
+
+    def __init__(self, shape):
+        self.n = 0
+        self.mean = np.zeros(shape)
+        self.m2 = np.zeros(shape)
+
+    def add(self, mean, var, count):
+        mean = mean.astype(np.float64)
+        delta = mean - self.mean
+        total = self.n + count
+        self.mean += delta * (count / total)
+        self.m2 += var.astype(np.float64) * count + delta ** 2 * (self.n * count / total)
+        self.n = total
 
 
 def _init_warp():
@@ -87,18 +140,19 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
     integ = make_integrator(scene, config)
     setup_ms = (time.perf_counter() - t_setup) * 1e3
     h, w = integ.height, integ.width
-    acc = np.zeros((h, w, 3))
-    acc2 = np.zeros((h, w, 3))
+    moments = _PixelMoments((h, w, 3))
+    frame_sums = np.zeros((4, h, w, 3))
+    spp = integ.settings["spp"]
     t0 = time.perf_counter()
     for f in range(config.frames):
-        mean, m2 = integ.render_frame(f)
-        acc += mean
-        acc2 += m2
+        mean, var = integ.render_frame(f)
+        moments.add(mean, var, spp)
+        m = mean.astype(np.float64)
+        frame_sums += (m, m ** 2, m ** 3, m ** 4)
         if progress:
             progress(f + 1, config.frames)
     total_ms = (time.perf_counter() - t0) * 1e3
     stage_ms = sum(v for v in integ.timer.ms.values())
-    spp = integ.settings["spp"]
     stats = {
         "scene": scene.name,
         "method": config.method,
@@ -120,4 +174,4 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         "scene_bytes": integ.dscene.memory_bytes(),
         "triangles": scene.num_triangles,
     }
-    return RenderResult((acc / config.frames).astype(np.float32), acc2 / config.frames, spp * config.frames, stats)
+    return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums)

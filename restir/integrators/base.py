@@ -36,5 +36,5 @@ class Integrator:
         raise NotImplementedError
 
     def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
-        """Returns (mean, second moment) per pixel over this frame's samples, each (H, W, 3)."""
+        """Returns (mean, variance) per pixel over this frame's samples, each (H, W, 3)."""
         raise NotImplementedError

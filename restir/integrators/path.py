@@ -1,7 +1,8 @@
 """Reference path tracer: NEE and BSDF sampling combined with the balance heuristic.
 
 Stage `path_trace` (one kernel): reads the scene and camera; writes `frame_mean` and
-`frame_m2` (per-pixel mean and second moment of this frame's spp samples).
+`frame_var` (per-pixel mean and variance of this frame's spp samples, by Welford's update:
+a second moment minus the squared mean would cancel catastrophically in float32).
 `max_depth` has Mitsuba's meaning (number of path segments; 1 = directly visible emission,
 2 = direct illumination, -1 = unbounded up to MAX_SEGMENTS). Russian roulette (Mitsuba's rule,
 off by default) starts at `rr_depth`. `strategy` selects MIS (default), NEE-only or BSDF-only,
@@ -149,15 +150,15 @@ def path_trace_kernel(
     camera: Camera,
     params: PTParams,
     frame_mean: wp.array(dtype=wp.vec3),
-    frame_m2: wp.array(dtype=wp.vec3),
+    frame_var: wp.array(dtype=wp.vec3),
     frame_rays: wp.array(dtype=wp.int32),
 ):
     pixel = wp.tid() + offset
     px = pixel % camera.width
     py = pixel // camera.width
     key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
-    acc = wp.vec3(0.0)
-    acc2 = wp.vec3(0.0)
+    mean = wp.vec3(0.0)
+    m2 = wp.vec3(0.0)
     rays = int(0)
     for s in range(params.spp):
         base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
@@ -165,11 +166,11 @@ def path_trace_kernel(
         res = path_radiance(scene, params, ray.o, ray.d, key, base)
         L = res.L * ray.weight
         rays += res.rays
-        acc += L
-        acc2 += wp.cw_mul(L, L)
-    inv = 1.0 / float(params.spp)
-    frame_mean[pixel] = acc * inv
-    frame_m2[pixel] = acc2 * inv
+        delta = L - mean
+        mean += delta / float(s + 1)
+        m2 += wp.cw_mul(delta, L - mean)
+    frame_mean[pixel] = mean
+    frame_var[pixel] = m2 / float(params.spp)
     frame_rays[pixel] = rays
 
 
@@ -188,7 +189,7 @@ class PathTracer(Integrator):
 
     def allocate(self) -> None:
         self.frame_mean = self.buffer("frame_mean", wp.vec3)
-        self.frame_m2 = self.buffer("frame_m2", wp.vec3)
+        self.frame_var = self.buffer("frame_var", wp.vec3)
         self.frame_rays = self.buffer("frame_rays", wp.int32)
 
     def params(self, frame: int) -> PTParams:
@@ -208,7 +209,7 @@ class PathTracer(Integrator):
         with self.timer.stage("path_trace"):
             launch_pixels(path_trace_kernel, self.num_pixels,
                           inputs=[self.dscene.scene, self.dscene.camera, self.params(frame)],
-                          outputs=[self.frame_mean, self.frame_m2, self.frame_rays], device=self.device, slices=self.slices)
+                          outputs=[self.frame_mean, self.frame_var, self.frame_rays], device=self.device, slices=self.slices)
         self.rays += int(self.frame_rays.numpy().sum(dtype=np.int64))
         shape = (self.height, self.width, 3)
-        return self.frame_mean.numpy().reshape(shape), self.frame_m2.numpy().reshape(shape)
+        return self.frame_mean.numpy().reshape(shape), self.frame_var.numpy().reshape(shape)
