@@ -77,7 +77,9 @@ def _look_at(origin, target, up):
     return look_at(origin, target, up)
 
 
-def cornell_box(glossy: bool = False, width=512, height=512, spp=16, max_depth=-1) -> dict:
+def cornell_box(glossy: bool = False, width=512, height=512, spp=16, max_depth=-1, light_scale=1.0) -> dict:
+    """light_scale > 1 enlarges the light about its centre (same radiance), for tests that need
+    BSDF sampling to find it often."""
     fov = math.degrees(2 * math.atan(12.5 / 35.0))
     cam = _look_at([0.278, 0.273, -0.800], [0.278, 0.273, 0.0], [0, 1, 0])
     white = _diffuse(WHITE)
@@ -92,7 +94,7 @@ def cornell_box(glossy: bool = False, width=512, height=512, spp=16, max_depth=-
         "red": _quads_mesh([_QUADS["red"]], _diffuse(RED)),
         "short": _quads_mesh(_SHORT_BLOCK, white),
         "tall": _quads_mesh(_TALL_BLOCK, white),
-        "light": _quads_mesh([_QUADS["light"]], _diffuse([0, 0, 0]),
+        "light": _quads_mesh([_scaled_quad(_QUADS["light"], light_scale)], _diffuse([0, 0, 0]),
                              {"type": "area", "radiance": {"type": "rgb", "value": LIGHT}}),
     }
     if glossy:
@@ -104,6 +106,12 @@ def cornell_box(glossy: bool = False, width=512, height=512, spp=16, max_depth=-
             "type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
             "specular_reflectance": {"type": "rgb", "value": WHITE}}}
     return scene
+
+
+def _scaled_quad(quad, s):
+    q = np.array(quad, float)
+    c = q.mean(0)
+    return list(c + (q - c) * s)
 
 
 def furnace(width=32, height=32, spp=16, max_depth=-1, albedo=0.5, radiance=0.5) -> dict:

@@ -22,9 +22,13 @@ FRAMES = 32
 ANALYTIC_REL_TOL = 5e-4
 
 
-def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0):
+def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0, other=None):
+    """Test r against a reference value/image; `other` is the reference's RenderResult when it is noisy."""
+    skew, kurt = np.abs(r.batch_skewness), r.batch_excess_kurtosis
+    if other is not None:  # the worse of the two sides decides whether pixel statistics are normal
+        skew, kurt = np.maximum(skew, np.abs(other.batch_skewness)), np.maximum(kurt, other.batch_excess_kurtosis)
     rep = RGBZTest(r.image, r.batch_variance_of_mean, reference, reference_var, tile=tile,
-                   df=r.frames - 1, skew=r.batch_skewness, rel_tol=rel_tol, kurtosis=r.batch_excess_kurtosis)
+                   df=r.frames - 1, skew=skew, rel_tol=rel_tol, kurtosis=kurt)
     print(rep)
     assert rep.passed, str(rep)
     return rep
@@ -66,7 +70,9 @@ def test_nee_bsdf_and_mis_agree(device, scene):
     """The three estimators of the same integral agree per pixel (Welch z, both sides noisy).
 
     Fast tier: 32x32 pixels, 32 frames x 128 spp, max_depth 4: image-level MDB under 2.5%
-    per channel (about 1.8% red and green, 2.1% blue); the slow tier repeats it at 8x the samples.
+    per channel; the slow tier repeats it at 8x the samples. The light is enlarged 3x so that
+    BSDF sampling finds it often enough for per-pixel batch means to be near normal (with the
+    original light the BSDF-only pixels are too skewed for a conclusive pixel-level test).
     """
     compare_strategies(device, scene, spp=128, mdb_bound=0.025)
 
@@ -78,8 +84,10 @@ def test_nee_bsdf_and_mis_agree_slow(device, scene):
 
 
 def compare_strategies(device, scene, spp, mdb_bound):
-    res = {s: render(scene, device, s, spp=spp, max_depth=4, width=32, height=32, seed=7 + i)
+    res = {s: render(scene, device, s, spp=spp, max_depth=4, width=32, height=32, seed=7 + i, light_scale=3.0)
            for i, s in enumerate(("mis", "nee", "bsdf"))}
     for a, b in (("mis", "nee"), ("mis", "bsdf"), ("nee", "bsdf")):
         print(scene, a, "vs", b)
-        assert check(res[a], res[b].image, res[b].batch_variance_of_mean).mdb < mdb_bound
+        rep = check(res[a], res[b].image, res[b].batch_variance_of_mean, other=res[b])
+        assert all(r.pixel_conclusive for r in rep.reports), "pixel level inconclusive: raise spp"
+        assert rep.mdb < mdb_bound
