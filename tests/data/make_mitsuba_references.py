@@ -1,0 +1,62 @@
+"""Render the Mitsuba 3 references of the shared scenes used by tests/integration/test_mitsuba.py.
+
+    pip install mitsuba==3.9.1            # and Debian's libllvm19 for the llvm_ad_rgb variant
+    DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
+        python tests/data/make_mitsuba_references.py [--scenes cornell-box ...]
+
+For each scene: K renders with independent seeds at the resolution, spp and max_depth below;
+stores the mean (`NAME.mean.exr`) and the variance of that mean (`NAME.var.exr`, from the
+spread of the K renders) plus `NAME.json` with the exact settings and this command.
+"""
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SHARED = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "scenes"))
+sys.path.insert(0, os.path.normpath(os.path.join(HERE, "..", "..")))
+
+# name: (resx, resy, max_depth, spp per render, renders K)
+REFERENCES = {
+    "cornell-box": (48, 48, 8, 4096, 16),
+    "veach-mis": (64, 36, 3, 4096, 16),
+    "veach-bidir": (48, 48, 7, 8192, 16),
+}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scenes", nargs="*", default=list(REFERENCES))
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    args = ap.parse_args()
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    from restir.image_io import write_exr
+
+    out_dir = os.path.join(HERE, "mitsuba")
+    os.makedirs(out_dir, exist_ok=True)
+    for name in args.scenes:
+        resx, resy, depth, spp, k = REFERENCES[name]
+        scene = mi.load_file(os.path.join(SHARED, name, "scene.xml"), resx=resx, resy=resy, max_depth=depth, spp=spp)
+        t0 = time.time()
+        imgs = np.stack([np.asarray(mi.render(scene, spp=spp, seed=1000 + i), np.float64)[..., :3] for i in range(k)])
+        mean, var = imgs.mean(0), imgs.var(0, ddof=1) / k
+        write_exr(os.path.join(out_dir, f"{name}.mean.exr"), mean.astype(np.float32))
+        write_exr(os.path.join(out_dir, f"{name}.var.exr"), var.astype(np.float32))
+        meta = {"scene": f"shared/scenes/{name}/scene.xml", "mitsuba": mi.__version__, "variant": args.variant,
+                "resx": resx, "resy": resy, "max_depth": depth, "spp_per_render": spp, "renders": k,
+                "seconds": round(time.time() - t0, 1), "machine": platform.machine(),
+                "command": "python tests/data/make_mitsuba_references.py --scenes " + name}
+        with open(os.path.join(out_dir, f"{name}.json"), "w") as f:
+            json.dump(meta, f, indent=2)
+        print(name, meta)
+
+
+if __name__ == "__main__":
+    main()
