@@ -115,7 +115,10 @@ def make_integrator(scene: Scene, config: RenderConfig):
                     rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     if hasattr(cls, "check_settings"):
         cls.check_settings(settings)
-    dscene = DeviceScene(scene, config.device)
+    try:
+        dscene = DeviceScene(scene, config.device, config.tracer)
+    except RuntimeError as e:
+        raise ConfigError(str(e)) from None
     return cls(dscene, settings, config.device, config.slices)
 
 
@@ -173,5 +176,6 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         "bytes_per_pixel": integ.buffers.per_pixel(w * h),
         "scene_bytes": integ.dscene.memory_bytes(),
         "triangles": scene.num_triangles,
+        "tracer": integ.dscene.tracer_used,
     }
     return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums)

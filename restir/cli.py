@@ -33,6 +33,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--max-depth", type=int, help="Mitsuba's max_depth (-1: unbounded)")
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
+    r.add_argument("--tracer", default="auto", choices=["auto", "embree", "warp"],
+                   help="CPU ray tracer (auto: Embree if available; CUDA always uses Warp's BVH)")
     r.add_argument("-D", dest="defines", action="append", type=_key_value, default=[], metavar="NAME=VALUE",
                    help="override a scene <default> (as Mitsuba's -D)")
     r.add_argument("--set", dest="settings", action="append", type=_key_value, default=[], metavar="KEY=VALUE",
@@ -55,7 +57,7 @@ def _render(args) -> int:
 
     console = Console(stderr=True, quiet=args.quiet)
     config = RenderConfig(method=args.method, spp=args.spp, frames=args.frames, width=args.width,
-                          height=args.height, max_depth=args.max_depth, seed=args.seed, device=args.device,
+                          height=args.height, max_depth=args.max_depth, seed=args.seed, device=args.device, tracer=args.tracer,
                           settings=dict(args.settings))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
@@ -78,7 +80,7 @@ def _render(args) -> int:
         written.append(args.stats)
     st = result.stats
     table = Table(title=f"{st['method']} on {st['scene']} ({st['width']}x{st['height']}, "
-                        f"{st['spp_per_frame']} spp x {st['frames']} frames, {st['device']})")
+                        f"{st['spp_per_frame']} spp x {st['frames']} frames, {st['device']}, {st['tracer']})")
     table.add_column("stage")
     table.add_column("ms per frame", justify="right")
     for name, s in st["stages"].items():

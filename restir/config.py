@@ -22,6 +22,7 @@ class RenderConfig:
     device: str = "cpu"
     settings: dict = field(default_factory=dict)   # method settings (see each method's SETTINGS)
     slices: int | None = None       # CPU launch slices (None: one per core)
+    tracer: str = "auto"            # "auto" (Embree on the CPU if available), "embree", "warp"
 
     def validate(self) -> None:
         if self.spp is not None and self.spp < 1:
@@ -34,6 +35,8 @@ class RenderConfig:
                 raise ConfigError(f"{k} must be >= 1")
         if self.max_depth is not None and (self.max_depth == 0 or self.max_depth < -1):
             raise ConfigError("max_depth must be -1 (unbounded) or >= 1")
+        if self.tracer not in ("auto", "embree", "warp"):
+            raise ConfigError("tracer must be auto, embree or warp")
         if not 0 <= self.seed < 2**32:
             raise ConfigError("seed must be in [0, 2^32)")
 

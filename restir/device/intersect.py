@@ -1,10 +1,11 @@
 """Ray queries: closest hit and visibility, with Mitsuba's self-intersection offsets.
 
-All tracing goes through `trace_closest` and `is_visible`, so the tracer behind them can change
-(Warp BVH on every device today) without touching any stage.
+All tracing goes through `trace_closest` and `is_visible`: Embree on the CPU, Warp's BVH on
+CUDA (device/native_trace.py), so every stage stays single-source.
 """
 import warp as wp
 
+from .native_trace import native_closest_hit, native_occluded
 from .scene_device import SceneDevice
 
 # Mitsuba: RayEpsilon = 1500 * 2^-24, ShadowEpsilon = 10 * RayEpsilon.
@@ -57,17 +58,17 @@ def surface_at(scene: SceneDevice, tri: int, bu: float, bv: float, t: float) -> 
 
 @wp.func
 def trace_closest(scene: SceneDevice, o: wp.vec3, d: wp.vec3, t_max: float) -> SurfaceHit:
-    q = wp.mesh_query_ray(scene.mesh, o, d, t_max)
-    if not q.result:
+    q = native_closest_hit(scene.mesh, scene.embree_scene, scene.embree_intersect, o, d, t_max)
+    if q[0] < 0.0:
         h = SurfaceHit()
         h.valid = 0
         h.t = T_MAX
         h.tri = -1
         return h
-    return surface_at(scene, q.face, q.u, q.v, q.t)
+    return surface_at(scene, int(q[3]), q[1], q[2], q[0])
 
 
 @wp.func
 def is_visible(scene: SceneDevice, o: wp.vec3, d: wp.vec3, dist: float) -> bool:
     """True if nothing blocks the unit direction d from o over (0, dist); stops short of the end."""
-    return not wp.mesh_query_ray_anyhit(scene.mesh, o, d, dist * (1.0 - SHADOW_EPSILON))
+    return not native_occluded(scene.mesh, scene.embree_scene, scene.embree_occluded, o, d, dist * (1.0 - SHADOW_EPSILON))

@@ -11,6 +11,9 @@ from .bsdf import Material
 @wp.struct
 class SceneDevice:
     mesh: wp.uint64                       # Warp BVH over all triangles
+    embree_scene: wp.uint64               # Embree scene handle (CPU), 0: trace with Warp's BVH
+    embree_intersect: wp.uint64           # address of rtcIntersect1
+    embree_occluded: wp.uint64            # address of rtcOccluded1
     positions: wp.array(dtype=wp.vec3)    # 3 per triangle
     normals: wp.array(dtype=wp.vec3)      # 3 per triangle (shading normals; unused where tri_smooth=0)
     uvs: wp.array(dtype=wp.vec2)          # 3 per triangle

@@ -39,9 +39,11 @@ def material_struct(m) -> Material:
 class DeviceScene:
     """Owns every device array of one scene; `.scene` and `.camera` are the kernel arguments."""
 
-    def __init__(self, scene: Scene, device: str = "cpu"):
+    def __init__(self, scene: Scene, device: str = "cpu", tracer: str = "auto"):
+        """tracer: "embree" (CPU only), "warp", or "auto" (Embree on the CPU when available)."""
         self.host = scene
         self.device = device
+        self.tracer = tracer
         self._arrays = []
         self.scene = self._scene_struct(scene)
         self.camera = self.camera_struct(scene.camera)
@@ -57,6 +59,21 @@ class DeviceScene:
         self.mesh = wp.Mesh(points=self._arr(pts, wp.vec3),
                             indices=self._arr(np.arange(len(pts), dtype=np.int32), wp.int32))
         s.mesh = self.mesh.id
+        s.embree_scene = s.embree_intersect = s.embree_occluded = wp.uint64(0)
+        self.embree = None
+        if wp.get_device(self.device).is_cpu and self.tracer in ("auto", "embree"):
+            from ..embree import EmbreeScene, library
+
+            if library() is not None:
+                self.embree = EmbreeScene(sc.positions)
+                s.embree_scene = wp.uint64(self.embree.scene)
+                s.embree_intersect = wp.uint64(self.embree.intersect_fn)
+                s.embree_occluded = wp.uint64(self.embree.occluded_fn)
+            elif self.tracer == "embree":
+                raise RuntimeError("Embree was requested but is not available (pip install embreex)")
+        elif self.tracer == "embree":
+            raise RuntimeError("Embree traces on the CPU only")
+        self.tracer_used = "embree" if self.embree is not None else "warp"
         s.positions = self.mesh.points
         s.normals = self._arr(sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
         s.uvs = self._arr(sc.uvs.reshape(-1, 2).astype(np.float32), wp.vec2)

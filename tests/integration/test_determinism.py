@@ -5,9 +5,9 @@ import pytest
 import restir
 
 
-def render(slices, seed=3, device="cpu", frames=2):
+def render(slices, seed=3, device="cpu", frames=2, tracer="auto"):
     scene = restir.load_scene("builtin:cornell-box-glossy", width=24, height=20)
-    cfg = restir.RenderConfig(spp=3, frames=frames, seed=seed, device=device, max_depth=6, slices=slices)
+    cfg = restir.RenderConfig(spp=3, frames=frames, seed=seed, device=device, max_depth=6, slices=slices, tracer=tracer)
     return restir.render(scene, cfg).image
 
 
@@ -16,9 +16,10 @@ def test_same_seed_is_bitwise_identical():
     assert np.array_equal(a, b)
 
 
+@pytest.mark.parametrize("tracer", ["auto", "warp"])
 @pytest.mark.parametrize("slices", [1, 3, 7, 480])
-def test_result_is_independent_of_slicing(slices):
-    assert np.array_equal(render(2), render(slices))
+def test_result_is_independent_of_slicing(slices, tracer):
+    assert np.array_equal(render(2, tracer=tracer), render(slices, tracer=tracer))
 
 
 def test_seeds_and_frames_give_independent_streams():
