@@ -98,10 +98,10 @@ class ZTestReport:
     """
 
     def __init__(self, mean, var, ref, ref_var=0.0, tile=8, alpha=1e-3, df=None, skew=None, rel_tol=0.0,
-                 kurtosis=None):
-        """rel_tol: an equivalence margin, |deviation| below rel_tol * |ref| counts as zero. Use it
-        only where the reference itself is known to that precision (tessellated analytic scenes,
-        ray offsets), never to absorb estimator noise."""
+                 kurtosis=None, abs_tol=0.0):
+        """rel_tol, abs_tol: an equivalence margin, |deviation| below rel_tol * |ref| + abs_tol
+        counts as zero. Use it only where the reference itself is known to that precision
+        (tessellated analytic scenes, ray offsets, float32 denormals), never to absorb noise."""
         mean = np.asarray(mean, np.float64)
         var = np.asarray(var, np.float64)
         ref = np.broadcast_to(np.asarray(ref, np.float64), mean.shape)
@@ -112,6 +112,7 @@ class ZTestReport:
         self.image_ref = float(ref.mean())
         self.image_se = float(np.sqrt(v.sum()) / mean.size)
         self.rel_tol = rel_tol
+        self.abs_tol = abs_tol
         self.image_z = self._z(self.image_mean - self.image_ref, self.image_ref, self.image_se)
         tm, tv = tile_means(mean[..., None], v[..., None], tile)
         tr, _ = tile_means(ref[..., None], v[..., None], tile)
@@ -134,7 +135,7 @@ class ZTestReport:
         self.mdb = mdb(self.image_crit, self.image_se, self.image_ref)
 
     def _z(self, dev, ref, se):
-        dev = np.sign(dev) * np.maximum(np.abs(dev) - self.rel_tol * np.abs(ref), 0.0)
+        dev = np.sign(dev) * np.maximum(np.abs(dev) - self.rel_tol * np.abs(ref) - self.abs_tol, 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(se > 0, dev / se, np.where(dev == 0, 0.0, np.inf))
 

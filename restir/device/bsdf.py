@@ -15,6 +15,7 @@ from .types import (
     MAT_CONDUCTOR,
     MAT_DIELECTRIC,
     MAT_DIFFUSE,
+    MAT_PLASTIC,
     MAT_ROUGHCONDUCTOR,
     MAT_ROUGHDIELECTRIC,
     MAT_THINDIELECTRIC,
@@ -35,6 +36,10 @@ class Material:
     distribution: int          # MICROFACET_*
     alpha_u: float
     alpha_v: float
+    # plastic: a smooth dielectric coat (ior) over a diffuse base (reflectance)
+    specular_sampling_weight: float
+    fdr_int: float             # diffuse Fresnel reflectance inside the coat
+    nonlinear: int
 
 
 @wp.struct
@@ -150,6 +155,35 @@ def roughdielectric_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
     return wp.abs(prob * dwh_dwo)
 
 
+# ----------------------------------------------------------------------------- plastic (Mitsuba's model)
+@wp.func
+def plastic_specular_probability(mat: Material, f_i: float) -> float:
+    ps = f_i * mat.specular_sampling_weight
+    pd = (1.0 - f_i) * (1.0 - mat.specular_sampling_weight)
+    return ps / (ps + pd)
+
+
+@wp.func
+def plastic_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    if wi[2] <= 0.0 or wo[2] <= 0.0:
+        return wp.vec3(0.0)
+    f_i = fresnel_dielectric(wi[2], mat.ior).r
+    f_o = fresnel_dielectric(wo[2], mat.ior).r
+    denom = wp.vec3(1.0 - mat.fdr_int)
+    if mat.nonlinear != 0:
+        denom = wp.vec3(1.0) - mat.reflectance * mat.fdr_int
+    diff = wp.cw_div(mat.reflectance, denom)
+    return diff * (INV_PI * wo[2] * (1.0 - f_i) * (1.0 - f_o) / (mat.ior * mat.ior))
+
+
+@wp.func
+def plastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
+    if wi[2] <= 0.0 or wo[2] <= 0.0:
+        return 0.0
+    f_i = fresnel_dielectric(wi[2], mat.ior).r
+    return (1.0 - plastic_specular_probability(mat, f_i)) * cosine_hemisphere_pdf(wo)
+
+
 # ----------------------------------------------------------------------------- dispatch
 @wp.func
 def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
@@ -172,6 +206,8 @@ def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
         return wp.cw_mul(F, mat.specular_reflectance) * v
     if mat.kind == MAT_ROUGHDIELECTRIC:
         return roughdielectric_eval(mat, wi, wo)
+    if mat.kind == MAT_PLASTIC:
+        return plastic_eval(mat, wi, wo)
     return wp.vec3(0.0)
 
 
@@ -194,6 +230,8 @@ def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
         return microfacet_pdf(d, wi, m) / (4.0 * wp.dot(wo, m))
     if mat.kind == MAT_ROUGHDIELECTRIC:
         return roughdielectric_pdf(mat, wi, wo)
+    if mat.kind == MAT_PLASTIC:
+        return plastic_pdf(mat, wi, wo)
     return 0.0
 
 
@@ -278,6 +316,23 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
         if s.pdf > 0.0:
             s.weight = roughdielectric_eval(mat, wi, s.wo) / s.pdf
             s.valid = 1
+    elif mat.kind == MAT_PLASTIC:
+        if wi[2] <= 0.0:
+            return s
+        f_i = fresnel_dielectric(wi[2], mat.ior).r
+        p_spec = plastic_specular_probability(mat, f_i)
+        if u_lobe < p_spec:
+            s.wo = reflect_local(wi)
+            s.pdf = p_spec
+            s.is_delta = 1
+            s.weight = mat.specular_reflectance * (f_i / p_spec)
+            s.valid = 1
+        else:
+            s.wo = square_to_cosine_hemisphere(u)
+            s.pdf = (1.0 - p_spec) * cosine_hemisphere_pdf(s.wo)
+            if s.pdf > 0.0:
+                s.weight = plastic_eval(mat, wi, s.wo) / s.pdf
+                s.valid = 1
     if flipped:
         s.wo = flip_z(s.wo)
     return s

@@ -49,12 +49,34 @@ def env_pixel(scene: SceneDevice, uv: wp.vec2) -> int:
 
 
 @wp.func
+def env_texel(scene: SceneDevice, x: int, y: int) -> wp.vec3:
+    return scene.env_pixels[y * scene.env_width + (x % scene.env_width)]
+
+
+@wp.func
+def env_lookup(scene: SceneDevice, uv: wp.vec2) -> wp.vec3:
+    """Mitsuba's envmap lookup: bilinear; columns periodic with texel centres at (i + 1/2)/W,
+    rows at v = j / (H - 1) (the first and last rows sit on the poles)."""
+    w = scene.env_width
+    h = scene.env_height
+    u = uv[0] - 0.5 / float(w)
+    u = (u - wp.floor(u)) * float(w)
+    v = uv[1] * float(h - 1)
+    x0 = wp.min(int(u), w - 1)
+    y0 = wp.min(int(v), h - 2)
+    fx = u - float(x0)
+    fy = v - float(y0)
+    a = env_texel(scene, x0, y0) * (1.0 - fx) + env_texel(scene, x0 + 1, y0) * fx
+    b = env_texel(scene, x0, y0 + 1) * (1.0 - fx) + env_texel(scene, x0 + 1, y0 + 1) * fx
+    return a * (1.0 - fy) + b * fy
+
+
+@wp.func
 def env_eval(scene: SceneDevice, d_world: wp.vec3) -> wp.vec3:
     if scene.env_kind == ENV_CONSTANT:
         return scene.env_radiance
     if scene.env_kind == ENV_MAP:
-        uv = env_dir_to_uv(scene, d_world)
-        return wp.cw_mul(scene.env_pixels[env_pixel(scene, uv)], scene.env_radiance)
+        return wp.cw_mul(env_lookup(scene, env_dir_to_uv(scene, d_world)), scene.env_radiance)
     return wp.vec3(0.0)
 
 

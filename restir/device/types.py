@@ -8,6 +8,7 @@ MAT_ROUGHCONDUCTOR = wp.constant(2)
 MAT_DIELECTRIC = wp.constant(3)
 MAT_THINDIELECTRIC = wp.constant(4)
 MAT_ROUGHDIELECTRIC = wp.constant(5)
+MAT_PLASTIC = wp.constant(6)
 
 # Microfacet distributions.
 MICROFACET_BECKMANN = wp.constant(0)

@@ -12,7 +12,8 @@ from .props import Props
 from .transforms import transform_normals, transform_points
 
 KINDS = {
-    "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "twosided"},
+    "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
+             "twosided"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
     "emitter": {"area", "constant", "envmap"},
     "sensor": {"perspective"},
@@ -48,6 +49,18 @@ class MaterialDesc:
     distribution: str = "beckmann"
     alpha_u: float = 0.1
     alpha_v: float = 0.1
+    specular_sampling_weight: float = 0.5
+    fdr_int: float = 0.0
+    nonlinear: bool = False
+
+
+def fresnel_diffuse_reflectance(eta: float) -> float:
+    """Hemispherical average of dielectric Fresnel reflectance: published fits, as Mitsuba uses
+    (Egan and Hilgeman 1973 for eta < 1; d'Eon and Irving 2011 otherwise)."""
+    if eta < 1.0:
+        return -1.4399 * eta * eta + 0.7099 * eta + 0.6681 + 0.0636 / eta
+    x = 1.0 / eta
+    return 0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 + x * -1.36881))))
 
 
 @dataclass
@@ -322,6 +335,25 @@ class _Builder:
             m.ior = int_ior / ext_ior
             m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
             m.specular_transmittance = p.rgb("specular_transmittance", np.ones(3))
+        if t == "plastic":
+            int_ior = self.ior(p, "int_ior", IOR_TABLE["polypropylene"])
+            ext_ior = self.ior(p, "ext_ior", IOR_TABLE["air"])
+            if int_ior <= 0 or ext_ior <= 0:
+                raise SceneError("IORs must be positive", p.loc)
+            m.ior = int_ior / ext_ior
+            r = p.color_or_texture("diffuse_reflectance", np.full(3, 0.5))
+            if isinstance(r, dict):
+                m.reflectance_tex = self.texture(r)
+                m.reflectance = np.ones(3)
+                d_mean = float(self.textures[m.reflectance_tex].mean())
+            else:
+                m.reflectance = r
+                d_mean = float(np.mean(r))
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+            s_mean = float(np.mean(m.specular_reflectance))
+            m.specular_sampling_weight = s_mean / (d_mean + s_mean)
+            m.fdr_int = fresnel_diffuse_reflectance(1.0 / m.ior)
+            m.nonlinear = p.bool("nonlinear", False)
         if t in ("roughconductor", "roughdielectric"):
             m.distribution = p.string("distribution", "beckmann")
             if m.distribution not in ("beckmann", "ggx"):
@@ -447,6 +479,8 @@ class _Builder:
             if not os.path.exists(path):
                 raise SceneError(f"environment map '{fname}' not found", p.loc)
             img = read_image(path, linearize_srgb=True)
+            if img.shape[0] < 3 or img.shape[1] < 2:
+                raise SceneError(f"environment map '{fname}' must be at least 2x3 pixels", p.loc)
             if not np.all(np.isfinite(img)):
                 raise SceneError(f"environment map '{fname}' contains NaN or inf", p.loc)
             self.env = ("envmap", np.full(3, p.float("scale", 1.0)), rot, img)

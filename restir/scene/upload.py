@@ -6,7 +6,7 @@ from ..device.bsdf import Material
 from ..device.camera import Camera
 from ..device.scene_device import SceneDevice
 from ..device.types import (ENV_CONSTANT, ENV_MAP, ENV_NONE, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT,
-                            MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
+                            MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
 from .scene import Scene
@@ -14,6 +14,7 @@ from .scene import Scene
 MATERIAL_KIND = {
     "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
     "dielectric": MAT_DIELECTRIC, "thindielectric": MAT_THINDIELECTRIC, "roughdielectric": MAT_ROUGHDIELECTRIC,
+    "plastic": MAT_PLASTIC,
 }
 FILTER_KIND = {"box": FILTER_BOX, "tent": FILTER_TENT, "gaussian": FILTER_GAUSSIAN}
 FILTER_TABLE_BINS = 256
@@ -33,6 +34,9 @@ def material_struct(m) -> Material:
     s.distribution = int(MICROFACET_GGX if m.distribution == "ggx" else MICROFACET_BECKMANN)
     s.alpha_u = float(m.alpha_u)
     s.alpha_v = float(m.alpha_v)
+    s.specular_sampling_weight = float(m.specular_sampling_weight)
+    s.fdr_int = float(m.fdr_int)
+    s.nonlinear = int(m.nonlinear)
     return s
 
 

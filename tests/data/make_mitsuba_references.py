@@ -26,6 +26,7 @@ REFERENCES = {
     "cornell-box": (48, 48, 8, 4096, 16),
     "veach-mis": (64, 36, 3, 4096, 16),
     "veach-bidir": (48, 48, 7, 8192, 16),
+    "features": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: envmap, texture, plastic, ...
 }
 
 
@@ -43,13 +44,21 @@ def main():
     os.makedirs(out_dir, exist_ok=True)
     for name in args.scenes:
         resx, resy, depth, spp, k = REFERENCES[name]
-        scene = mi.load_file(os.path.join(SHARED, name, "scene.xml"), resx=resx, resy=resy, max_depth=depth, spp=spp)
+        if name == "features":
+            import tempfile
+
+            from tests.data.feature_scene import write_feature_scene
+
+            path = write_feature_scene(tempfile.mkdtemp())
+        else:
+            path = os.path.join(SHARED, name, "scene.xml")
+        scene = mi.load_file(path, resx=resx, resy=resy, max_depth=depth, spp=spp)
         t0 = time.time()
         imgs = np.stack([np.asarray(mi.render(scene, spp=spp, seed=1000 + i), np.float64)[..., :3] for i in range(k)])
         mean, var = imgs.mean(0), imgs.var(0, ddof=1) / k
         write_exr(os.path.join(out_dir, f"{name}.mean.exr"), mean.astype(np.float32))
         write_exr(os.path.join(out_dir, f"{name}.var.exr"), var.astype(np.float32))
-        meta = {"scene": f"shared/scenes/{name}/scene.xml", "mitsuba": mi.__version__, "variant": args.variant,
+        meta = {"scene": "tests/data/feature_scene.py" if name == "features" else f"shared/scenes/{name}/scene.xml", "mitsuba": mi.__version__, "variant": args.variant,
                 "resx": resx, "resy": resy, "max_depth": depth, "spp_per_render": spp, "renders": k,
                 "seconds": round(time.time() - t0, 1), "machine": platform.machine(),
                 "command": "python tests/data/make_mitsuba_references.py --scenes " + name}

@@ -11,7 +11,8 @@ from restir.device.bsdf import Material, bsdf_eval, bsdf_pdf, bsdf_sample
 from restir.device.fresnel import fresnel_conductor, fresnel_dielectric
 from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
-                                 MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
+                                 MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
+                                 MICROFACET_GGX)
 from tests.stats import chi2_test, expected_counts, histogram_directions, integration_points
 
 ALPHA = 1e-3
@@ -32,13 +33,16 @@ def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
     m.ior = ior
     m.distribution = int(dist)
     m.alpha_u, m.alpha_v = alpha
+    m.specular_sampling_weight = 1.0 / (1.0 + 0.5)
+    m.fdr_int = 0.6
+    m.nonlinear = 0
     return m
 
 
 @wp.kernel
 def sample_kernel(mat: Material, wi: wp.vec3, seed: wp.uint32, wo: wp.array(dtype=wp.vec3),
                   weight: wp.array(dtype=wp.vec3), pdf: wp.array(dtype=float), valid: wp.array(dtype=wp.int32),
-                  pdf_check: wp.array(dtype=float), eval_check: wp.array(dtype=wp.vec3)):
+                  pdf_check: wp.array(dtype=float), eval_check: wp.array(dtype=wp.vec3), delta: wp.array(dtype=wp.int32)):
     i = wp.tid()
     key = rng_key(seed, wp.uint32(0), wp.uint32(0), wp.uint32(i))
     s = bsdf_sample(mat, wi, rng_uniform(key, wp.uint32(0)), rng_uniform2(key, wp.uint32(1)))
@@ -48,6 +52,7 @@ def sample_kernel(mat: Material, wi: wp.vec3, seed: wp.uint32, wo: wp.array(dtyp
     valid[i] = s.valid
     pdf_check[i] = bsdf_pdf(mat, wi, s.wo)
     eval_check[i] = bsdf_eval(mat, wi, s.wo)
+    delta[i] = s.is_delta
 
 
 @wp.kernel
@@ -56,10 +61,11 @@ def pdf_kernel(mat: Material, wi: wp.vec3, dirs: wp.array(dtype=wp.vec3), out: w
     out[i] = bsdf_pdf(mat, wi, dirs[i])
 
 
-def run_sampler(mat, wi, n=N, seed=1):
-    arrs = [wp.zeros(n, dtype=t, device="cpu") for t in (wp.vec3, wp.vec3, float, wp.int32, float, wp.vec3)]
+def run_sampler(mat, wi, n=N, seed=1, with_delta=False):
+    arrs = [wp.zeros(n, dtype=t, device="cpu") for t in (wp.vec3, wp.vec3, float, wp.int32, float, wp.vec3, wp.int32)]
     wp.launch(sample_kernel, dim=n, inputs=[mat, wp.vec3(*wi), wp.uint32(seed), *arrs], device="cpu")
-    return [a.numpy() for a in arrs]
+    out = [a.numpy() for a in arrs]
+    return out if with_delta else out[:6]
 
 
 def direction(theta_deg, phi_deg=30.0, below=False):
@@ -83,13 +89,16 @@ SMOOTH_CASES = [
     ("roughdielectric-ggx-inside", material(MAT_ROUGHDIELECTRIC, (0.3, 0.3)), direction(25, below=True)),
     ("roughdielectric-ggx-inside-tir", material(MAT_ROUGHDIELECTRIC, (0.2, 0.2)), direction(60, below=True)),
     ("roughdielectric-beckmann", material(MAT_ROUGHDIELECTRIC, (0.25, 0.25), MICROFACET_BECKMANN, ior=1.33), direction(55)),
+    ("plastic-diffuse-lobe", material(MAT_PLASTIC, ior=1.49), direction(50)),
+    ("plastic-grazing", material(MAT_PLASTIC, ior=1.49), direction(85)),
 ]
 
 
 @pytest.mark.parametrize("name,mat,wi", SMOOTH_CASES, ids=[c[0] for c in SMOOTH_CASES])
 def test_sampling_matches_pdf(name, mat, wi):
-    wo, weight, pdf, valid, pdf_check, eval_check = run_sampler(mat, wi)
-    ok = valid == 1
+    wo, weight, pdf, valid, pdf_check, eval_check, delta = run_sampler(mat, wi, with_delta=True)
+    # Delta lobes (plastic's coat) are checked separately; the pdf function covers the rest.
+    ok = (valid == 1) & (delta == 0)
     # the pdf a sample reports is the pdf function's value, and weight = eval / pdf
     np.testing.assert_allclose(pdf[ok], pdf_check[ok], rtol=2e-3, atol=1e-6)
     np.testing.assert_allclose(weight[ok] * pdf[ok, None], eval_check[ok], rtol=2e-3, atol=1e-5)
@@ -173,3 +182,16 @@ def test_one_sided_is_black_from_behind():
     for kind in (MAT_DIFFUSE, MAT_ROUGHCONDUCTOR):
         _, weight, _, valid, _, _ = run_sampler(material(kind), wi, n=1000)
         assert not valid.any() and not weight.any()
+
+
+def test_plastic_specular_lobe():
+    """Coat reflection: chosen with the documented probability and weighted F_i / p."""
+    wi = direction(60)
+    wo, weight, pdf, valid, _, _, delta = run_sampler(material(MAT_PLASTIC, ior=1.49), wi, n=200_000, with_delta=True)
+    F = fresnel_reference(wi[2], 1.49)
+    w = 1.0 / 1.5
+    p_spec = F * w / (F * w + (1 - F) * (1 - w))
+    d = delta == 1
+    assert abs(d.mean() - p_spec) < 4.5 * np.sqrt(p_spec * (1 - p_spec) / len(d))
+    np.testing.assert_allclose(wo[d], np.tile([-wi[0], -wi[1], wi[2]], (d.sum(), 1)), atol=1e-6)
+    np.testing.assert_allclose(weight[d], np.tile(np.array([1.0, 0.9, 0.8]) * F / p_spec, (d.sum(), 1)), rtol=1e-4)
