@@ -17,6 +17,7 @@ from .types import (
     MAT_DIFFUSE,
     MAT_PLASTIC,
     MAT_ROUGHCONDUCTOR,
+    MAT_ROUGHPLASTIC,
     MAT_ROUGHDIELECTRIC,
     MAT_THINDIELECTRIC,
 )
@@ -36,10 +37,12 @@ class Material:
     distribution: int          # MICROFACET_*
     alpha_u: float
     alpha_v: float
-    # plastic: a smooth dielectric coat (ior) over a diffuse base (reflectance)
+    # plastic / roughplastic: a dielectric coat (ior; rough: distribution, alpha_u) over a diffuse
+    # base (reflectance)
     specular_sampling_weight: float
-    fdr_int: float             # diffuse Fresnel reflectance inside the coat
+    fdr_int: float             # reflectance of the coat for diffuse light from inside
     nonlinear: int
+    coat_transmittance: wp.array(dtype=float)  # roughplastic: T(cos) at cos = i/63 (scene/coat_tables.py)
 
 
 @wp.struct
@@ -184,6 +187,48 @@ def plastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
     return (1.0 - plastic_specular_probability(mat, f_i)) * cosine_hemisphere_pdf(wo)
 
 
+# ----------------------------------------------------------------------------- rough plastic (Mitsuba's model)
+@wp.func
+def coat_transmittance(mat: Material, cos_t: float) -> float:
+    n = mat.coat_transmittance.shape[0]
+    x = cos_t * float(n - 1)
+    i = wp.min(int(x), n - 2)
+    f = x - float(i)
+    return mat.coat_transmittance[i] * (1.0 - f) + mat.coat_transmittance[i + 1] * f
+
+
+@wp.func
+def roughplastic_specular_probability(mat: Material, t_i: float) -> float:
+    ps = (1.0 - t_i) * mat.specular_sampling_weight
+    pd = t_i * (1.0 - mat.specular_sampling_weight)
+    return ps / (ps + pd)
+
+
+@wp.func
+def roughplastic_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    if wi[2] <= 0.0 or wo[2] <= 0.0:
+        return wp.vec3(0.0)
+    d = microfacet_of(mat)
+    m = wp.normalize(wi + wo)
+    spec = fresnel_dielectric(wp.dot(wi, m), mat.ior).r * microfacet_D(d, m) * microfacet_G(d, wi, wo, m) / (4.0 * wi[2])
+    denom = wp.vec3(1.0 - mat.fdr_int)
+    if mat.nonlinear != 0:
+        denom = wp.vec3(1.0) - mat.reflectance * mat.fdr_int
+    diff = wp.cw_div(mat.reflectance, denom) * (
+        INV_PI * wo[2] * coat_transmittance(mat, wi[2]) * coat_transmittance(mat, wo[2]) / (mat.ior * mat.ior))
+    return mat.specular_reflectance * spec + diff
+
+
+@wp.func
+def roughplastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
+    if wi[2] <= 0.0 or wo[2] <= 0.0:
+        return 0.0
+    p_spec = roughplastic_specular_probability(mat, coat_transmittance(mat, wi[2]))
+    m = wp.normalize(wi + wo)
+    spec = microfacet_pdf(microfacet_of(mat), wi, m) / (4.0 * wp.dot(wo, m))
+    return p_spec * spec + (1.0 - p_spec) * cosine_hemisphere_pdf(wo)
+
+
 # ----------------------------------------------------------------------------- dispatch
 @wp.func
 def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
@@ -208,6 +253,8 @@ def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
         return roughdielectric_eval(mat, wi, wo)
     if mat.kind == MAT_PLASTIC:
         return plastic_eval(mat, wi, wo)
+    if mat.kind == MAT_ROUGHPLASTIC:
+        return roughplastic_eval(mat, wi, wo)
     return wp.vec3(0.0)
 
 
@@ -232,6 +279,8 @@ def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
         return roughdielectric_pdf(mat, wi, wo)
     if mat.kind == MAT_PLASTIC:
         return plastic_pdf(mat, wi, wo)
+    if mat.kind == MAT_ROUGHPLASTIC:
+        return roughplastic_pdf(mat, wi, wo)
     return 0.0
 
 
@@ -333,6 +382,17 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             if s.pdf > 0.0:
                 s.weight = plastic_eval(mat, wi, s.wo) / s.pdf
                 s.valid = 1
+    elif mat.kind == MAT_ROUGHPLASTIC:
+        if wi[2] <= 0.0:
+            return s
+        if u_lobe < roughplastic_specular_probability(mat, coat_transmittance(mat, wi[2])):
+            s.wo = reflect_about(wi, microfacet_sample(microfacet_of(mat), wi, u))
+        else:
+            s.wo = square_to_cosine_hemisphere(u)
+        s.pdf = roughplastic_pdf(mat, wi, s.wo)
+        if s.pdf > 0.0:
+            s.weight = roughplastic_eval(mat, wi, s.wo) / s.pdf
+            s.valid = 1
     if flipped:
         s.wo = flip_z(s.wo)
     return s

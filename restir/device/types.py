@@ -9,6 +9,7 @@ MAT_DIELECTRIC = wp.constant(3)
 MAT_THINDIELECTRIC = wp.constant(4)
 MAT_ROUGHDIELECTRIC = wp.constant(5)
 MAT_PLASTIC = wp.constant(6)
+MAT_ROUGHPLASTIC = wp.constant(7)
 
 # Microfacet distributions.
 MICROFACET_BECKMANN = wp.constant(0)

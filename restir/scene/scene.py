@@ -13,7 +13,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "twosided"},
+             "roughplastic", "twosided"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
     "emitter": {"area", "constant", "envmap"},
     "sensor": {"perspective"},
@@ -52,6 +52,7 @@ class MaterialDesc:
     specular_sampling_weight: float = 0.5
     fdr_int: float = 0.0
     nonlinear: bool = False
+    coat_transmittance: np.ndarray | None = None
 
 
 def fresnel_diffuse_reflectance(eta: float) -> float:
@@ -335,7 +336,7 @@ class _Builder:
             m.ior = int_ior / ext_ior
             m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
             m.specular_transmittance = p.rgb("specular_transmittance", np.ones(3))
-        if t == "plastic":
+        if t in ("plastic", "roughplastic"):
             int_ior = self.ior(p, "int_ior", IOR_TABLE["polypropylene"])
             ext_ior = self.ior(p, "ext_ior", IOR_TABLE["air"])
             if int_ior <= 0 or ext_ior <= 0:
@@ -352,8 +353,23 @@ class _Builder:
             m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
             s_mean = float(np.mean(m.specular_reflectance))
             m.specular_sampling_weight = s_mean / (d_mean + s_mean)
-            m.fdr_int = fresnel_diffuse_reflectance(1.0 / m.ior)
             m.nonlinear = p.bool("nonlinear", False)
+            if t == "plastic":
+                m.fdr_int = fresnel_diffuse_reflectance(1.0 / m.ior)
+            else:
+                from .coat_tables import roughplastic_tables
+
+                m.distribution = p.string("distribution", "beckmann")
+                if m.distribution not in ("beckmann", "ggx"):
+                    raise SceneError(f"unknown microfacet distribution '{m.distribution}'", p.loc)
+                if p.has("alpha_u") or p.has("alpha_v"):
+                    raise SceneError("roughplastic supports isotropic roughness only (as Mitsuba)", p.loc)
+                m.alpha_u = m.alpha_v = max(p.float("alpha", 0.1), 1e-4)
+                if p.has("sample_visible"):
+                    p.bool("sample_visible")
+                if m.ior == 1.0:
+                    raise SceneError("roughplastic needs int_ior != ext_ior", p.loc)
+                m.coat_transmittance, m.fdr_int = roughplastic_tables(m.distribution, m.alpha_u, m.ior)
         if t in ("roughconductor", "roughdielectric"):
             m.distribution = p.string("distribution", "beckmann")
             if m.distribution not in ("beckmann", "ggx"):

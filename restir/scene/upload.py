@@ -6,7 +6,7 @@ from ..device.bsdf import Material
 from ..device.camera import Camera
 from ..device.scene_device import SceneDevice
 from ..device.types import (ENV_CONSTANT, ENV_MAP, ENV_NONE, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT,
-                            MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR,
+                            MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
 from .scene import Scene
@@ -14,13 +14,14 @@ from .scene import Scene
 MATERIAL_KIND = {
     "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
     "dielectric": MAT_DIELECTRIC, "thindielectric": MAT_THINDIELECTRIC, "roughdielectric": MAT_ROUGHDIELECTRIC,
-    "plastic": MAT_PLASTIC,
+    "plastic": MAT_PLASTIC, "roughplastic": MAT_ROUGHPLASTIC,
 }
 FILTER_KIND = {"box": FILTER_BOX, "tent": FILTER_TENT, "gaussian": FILTER_GAUSSIAN}
 FILTER_TABLE_BINS = 256
 
 
-def material_struct(m) -> Material:
+def material_struct(m, device="cpu") -> Material:
+    """The caller keeps `s.coat_transmittance` alive (DeviceScene does, via _arrays)."""
     s = Material()
     s.kind = int(MATERIAL_KIND[m.kind])
     s.twosided = int(m.twosided)
@@ -37,6 +38,8 @@ def material_struct(m) -> Material:
     s.specular_sampling_weight = float(m.specular_sampling_weight)
     s.fdr_int = float(m.fdr_int)
     s.nonlinear = int(m.nonlinear)
+    table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
+    s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
     return s
 
 
@@ -84,7 +87,9 @@ class DeviceScene:
         s.tri_smooth = self._arr(sc.tri_smooth.astype(np.int32), wp.int32)
         s.tri_material = self._arr(sc.tri_material.astype(np.int32), wp.int32)
         s.tri_emission = self._arr(sc.tri_emission.astype(np.float32), wp.vec3)
-        s.materials = wp.array([material_struct(m) for m in sc.materials], dtype=Material, device=self.device)
+        structs = [material_struct(m, self.device) for m in sc.materials]
+        self._arrays += [ms.coat_transmittance for ms in structs]
+        s.materials = wp.array(structs, dtype=Material, device=self.device)
         self._arrays.append(s.materials)
 
         power = sc.light_power()

@@ -1,5 +1,5 @@
 """A small scene exercising what the shared scenes do not: envmap (with to_world), bitmap texture,
-plastic, rough dielectric, GGX rough conductor, disk, constant-free lighting.
+plastic, roughplastic (GGX and Beckmann), rough dielectric, GGX rough conductor, disk light.
 
 `write_feature_scene(directory)` writes scene.xml, env.exr and checker.png there; both the Mitsuba
 reference generator and the test call it, so they render identical inputs.
@@ -44,6 +44,15 @@ SCENE = """<scene version="3.0.0">
         <transform name="to_world"><scale value="0.35"/><rotate y="1" angle="30"/><translate x="1.3" y="0.35" z="-0.3"/></transform>
         <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/>
             <rgb name="eta" value="0.2, 0.92, 1.1"/><rgb name="k" value="3.9, 2.45, 2.14"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="1.5" y="0.3" z="1.0"/><float name="radius" value="0.3"/>
+        <bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.15"/>
+            <rgb name="diffuse_reflectance" value="0.7, 0.2, 0.1"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="-0.4" y="0.25" z="-0.9"/><float name="radius" value="0.25"/>
+        <bsdf type="roughplastic"><float name="alpha" value="0.3"/><rgb name="diffuse_reflectance" value="0.2, 0.6, 0.2"/></bsdf>
     </shape>
     <shape type="disk">
         <transform name="to_world"><scale value="0.4"/><rotate x="1" angle="90"/><translate x="0" y="2.5" z="0"/></transform>

@@ -11,13 +11,17 @@ from restir.device.bsdf import Material, bsdf_eval, bsdf_pdf, bsdf_sample
 from restir.device.fresnel import fresnel_conductor, fresnel_dielectric
 from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
-                                 MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
+                                 MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
                                  MICROFACET_GGX)
 from tests.stats import chi2_test, expected_counts, histogram_directions, integration_points
 
 ALPHA = 1e-3
 N = 1_000_000
 NT, NP, SUB = 40, 80, 8
+
+
+_ONES = wp.array(np.ones(2, np.float32), dtype=float, device="cpu")
+_KEEP = []
 
 
 def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
@@ -36,6 +40,14 @@ def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
     m.specular_sampling_weight = 1.0 / (1.0 + 0.5)
     m.fdr_int = 0.6
     m.nonlinear = 0
+    if kind == MAT_ROUGHPLASTIC:
+        from restir.scene.coat_tables import roughplastic_tables
+
+        table, m.fdr_int = roughplastic_tables("ggx" if dist == MICROFACET_GGX else "beckmann", alpha[0], ior)
+        m.coat_transmittance = wp.array(table.astype(np.float32), dtype=float, device="cpu")
+        _KEEP.append(m.coat_transmittance)
+    else:
+        m.coat_transmittance = _ONES
     return m
 
 
@@ -91,6 +103,8 @@ SMOOTH_CASES = [
     ("roughdielectric-beckmann", material(MAT_ROUGHDIELECTRIC, (0.25, 0.25), MICROFACET_BECKMANN, ior=1.33), direction(55)),
     ("plastic-diffuse-lobe", material(MAT_PLASTIC, ior=1.49), direction(50)),
     ("plastic-grazing", material(MAT_PLASTIC, ior=1.49), direction(85)),
+    ("roughplastic-ggx", material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), direction(40)),
+    ("roughplastic-beckmann-grazing", material(MAT_ROUGHPLASTIC, (0.3, 0.3), MICROFACET_BECKMANN, ior=1.49), direction(80)),
 ]
 
 
