@@ -291,14 +291,14 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
     if flipped:
         wi = flip_z(wi)
     s = invalid_sample()
+    # Each kind picks a direction; delta lobes also set pdf and weight. Every other sample is
+    # weighted below by the same eval and pdf functions that NEE and MIS use.
+    evaluate = int(0)
     if mat.kind == MAT_DIFFUSE:
         if wi[2] <= 0.0:
             return s
         s.wo = square_to_cosine_hemisphere(u)
-        s.pdf = cosine_hemisphere_pdf(s.wo)
-        if s.pdf > 0.0:
-            s.weight = mat.reflectance
-            s.valid = 1
+        evaluate = 1
     elif mat.kind == MAT_CONDUCTOR:
         if wi[2] <= 0.0:
             return s
@@ -310,14 +310,8 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
     elif mat.kind == MAT_ROUGHCONDUCTOR:
         if wi[2] <= 0.0:
             return s
-        d = microfacet_of(mat)
-        m = microfacet_sample(d, wi, u)
-        s.wo = reflect_about(wi, m)
-        if s.wo[2] > 0.0:
-            s.pdf = bsdf_pdf(mat, wi, s.wo)
-            if s.pdf > 0.0:
-                s.weight = bsdf_eval(mat, wi, s.wo) / s.pdf
-                s.valid = 1
+        s.wo = reflect_about(wi, microfacet_sample(microfacet_of(mat), wi, u))
+        evaluate = 1
     elif mat.kind == MAT_DIELECTRIC:
         fr = fresnel_dielectric(wi[2], mat.ior)
         s.is_delta = 1
@@ -348,10 +342,10 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.pdf = 1.0 - r
             s.weight = mat.specular_transmittance
     elif mat.kind == MAT_ROUGHDIELECTRIC:
-        d = microfacet_of(mat)
-        sgn = wp.sign(wi[2])
-        m = microfacet_sample(d, wi * sgn, u)
+        m = microfacet_sample(microfacet_of(mat), wi * wp.sign(wi[2]), u)
         fr = fresnel_dielectric(wp.dot(wi, m), mat.ior)
+        # A sample on the wrong side of the macro-surface is rejected, not re-scored: the pdf
+        # function would read it as the other lobe, whose density is not what produced it.
         if u_lobe <= fr.r:
             s.wo = reflect_about(wi, m)
             if s.wo[2] * wi[2] <= 0.0:
@@ -361,10 +355,7 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.eta = fr.eta_it
             if s.wo[2] * wi[2] >= 0.0:
                 return invalid_sample()
-        s.pdf = roughdielectric_pdf(mat, wi, s.wo)
-        if s.pdf > 0.0:
-            s.weight = roughdielectric_eval(mat, wi, s.wo) / s.pdf
-            s.valid = 1
+        evaluate = 1
     elif mat.kind == MAT_PLASTIC:
         if wi[2] <= 0.0:
             return s
@@ -378,10 +369,7 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.valid = 1
         else:
             s.wo = square_to_cosine_hemisphere(u)
-            s.pdf = (1.0 - p_spec) * cosine_hemisphere_pdf(s.wo)
-            if s.pdf > 0.0:
-                s.weight = plastic_eval(mat, wi, s.wo) / s.pdf
-                s.valid = 1
+            evaluate = 1
     elif mat.kind == MAT_ROUGHPLASTIC:
         if wi[2] <= 0.0:
             return s
@@ -389,10 +377,15 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.wo = reflect_about(wi, microfacet_sample(microfacet_of(mat), wi, u))
         else:
             s.wo = square_to_cosine_hemisphere(u)
-        s.pdf = roughplastic_pdf(mat, wi, s.wo)
+        evaluate = 1
+    if evaluate != 0:
+        # Directions on the wrong side (or where the lobe is zero) have pdf or eval 0: invalid.
+        s.pdf = bsdf_pdf(mat, wi, s.wo)
         if s.pdf > 0.0:
-            s.weight = roughplastic_eval(mat, wi, s.wo) / s.pdf
-            s.valid = 1
+            f = bsdf_eval(mat, wi, s.wo)
+            if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
+                s.weight = f / s.pdf
+                s.valid = 1
     if flipped:
         s.wo = flip_z(s.wo)
     return s
