@@ -1,8 +1,9 @@
 """Beckmann and GGX microfacet distributions (Mitsuba's conventions, anisotropic alphas).
 
-Sampling: GGX samples visible normals (Heitz 2018). Beckmann samples D(m)*cos(theta_m); its
-Smith G1 uses Walter's rational fit (as Mitsuba does), so sampling by that exact density keeps
-pdf and sampler consistent, which a visible-normal sampler with an approximate G1 would not.
+Both sample visible normals: GGX by Heitz (2018); Beckmann by Heitz and d'Eon (2014), the
+slope in the incident plane drawn by a safeguarded Newton inversion of its CDF. The *shading*
+G1 of Beckmann is Walter's rational fit (as in Mitsuba's eval); the *pdf* of the visible-normal
+sampler must be the density it really produces, so it uses the exact Smith G1 (erf form).
 """
 import warp as wp
 
@@ -53,31 +54,77 @@ def microfacet_G(d: Microfacet, wi: wp.vec3, wo: wp.vec3, m: wp.vec3) -> float:
 
 
 @wp.func
-def microfacet_pdf(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> float:
-    """Density of the sampled normal m given wi (wi in the upper hemisphere)."""
-    if d.kind == MICROFACET_BECKMANN:
-        return microfacet_D(d, m) * wp.max(m[2], 0.0)
-    if wi[2] <= 0.0:
+def beckmann_G1_exact(d: Microfacet, v: wp.vec3, m: wp.vec3) -> float:
+    """Smith G1 of Beckmann in closed form: 1 / (1 + Lambda(a)), a = 1 / (alpha tan theta)."""
+    if wp.dot(v, m) * v[2] <= 0.0:
         return 0.0
-    return microfacet_G1(d, wi, m) * wp.max(wp.dot(wi, m), 0.0) * microfacet_D(d, m) / wi[2]
+    xy_alpha2 = (d.alpha_u * v[0]) * (d.alpha_u * v[0]) + (d.alpha_v * v[1]) * (d.alpha_v * v[1])
+    if xy_alpha2 == 0.0:
+        return 1.0
+    a = wp.abs(v[2]) / wp.sqrt(xy_alpha2)
+    lam = 0.5 * (wp.erf(a) - 1.0) + wp.exp(-a * a) / (2.0 * a * wp.sqrt(PI))
+    return 1.0 / (1.0 + lam)
 
 
 @wp.func
-def sample_beckmann(d: Microfacet, u: wp.vec2) -> wp.vec3:
-    phi = 2.0 * PI * u[1]
-    cos_phi = wp.cos(phi)
-    sin_phi = wp.sin(phi)
-    alpha2 = d.alpha_u * d.alpha_u
-    if d.alpha_u != d.alpha_v:
-        # Anisotropic: phi distributed as atan(alpha_v/alpha_u * tan(2 pi u)).
-        phi = wp.atan(d.alpha_v / d.alpha_u * wp.tan(PI + 2.0 * PI * u[1])) + PI * wp.floor(2.0 * u[1] + 0.5)
-        cos_phi = wp.cos(phi)
-        sin_phi = wp.sin(phi)
-        alpha2 = 1.0 / (cos_phi * cos_phi / (d.alpha_u * d.alpha_u) + sin_phi * sin_phi / (d.alpha_v * d.alpha_v))
-    tan2 = -alpha2 * wp.log(1.0 - u[0])
-    cos_t = 1.0 / wp.sqrt(1.0 + tan2)
-    sin_t = wp.sqrt(wp.max(0.0, 1.0 - cos_t * cos_t))
-    return wp.vec3(sin_t * cos_phi, sin_t * sin_phi, cos_t)
+def microfacet_pdf(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> float:
+    """Density of the visible normal m given wi (wi in the upper hemisphere)."""
+    if wi[2] <= 0.0:
+        return 0.0
+    g1 = float(0.0)
+    if d.kind == MICROFACET_BECKMANN:
+        g1 = beckmann_G1_exact(d, wi, m)
+    else:
+        g1 = microfacet_G1(d, wi, m)
+    return g1 * wp.max(wp.dot(wi, m), 0.0) * microfacet_D(d, m) / wi[2]
+
+
+@wp.func
+def beckmann_visible_slopes(cos_i: float, u: wp.vec2) -> wp.vec2:
+    """Visible slopes of the unit-roughness Beckmann distribution, incident plane along +x."""
+    if cos_i > 0.9999:  # normal incidence: the slopes are an isotropic Gaussian
+        r = wp.sqrt(-wp.log(wp.max(1.0 - u[0], 1.0e-12)))
+        phi = 2.0 * PI * u[1]
+        return wp.vec2(r * wp.cos(phi), r * wp.sin(phi))
+    sin_i = wp.sqrt(wp.max(0.0, 1.0 - cos_i * cos_i))
+    tan_i = sin_i / cos_i
+    cot_i = cos_i / sin_i
+    # CDF of b = erf(slope): C(b) = k (1 + b + tan_i exp(-erfinv(b)^2) / sqrt(pi)) on [-1, erf(cot_i)]
+    lo = float(-1.0)
+    hi = wp.erf(cot_i)
+    k = 1.0 / (1.0 + hi + tan_i * wp.exp(-cot_i * cot_i) / wp.sqrt(PI))
+    target = wp.max(u[0], 1.0e-6)
+    theta_i = wp.acos(cos_i)
+    fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i))  # good first guess
+    b = hi - (1.0 + hi) * wp.pow(1.0 - target, fit)
+    for _ in range(12):
+        if not (b >= lo and b <= hi):
+            b = 0.5 * (lo + hi)  # keep Newton inside the bracket
+        e = wp.erfinv(b)
+        value = k * (1.0 + b + tan_i * wp.exp(-e * e) / wp.sqrt(PI)) - target
+        if wp.abs(value) < 1.0e-6:
+            break
+        if value > 0.0:
+            hi = b
+        else:
+            lo = b
+        b = b - value / (k * (1.0 - e * tan_i))
+    return wp.vec2(wp.erfinv(b), wp.erfinv(2.0 * wp.clamp(u[1], 1.0e-7, 1.0 - 1.0e-7) - 1.0))
+
+
+@wp.func
+def sample_beckmann_visible(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
+    ws = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))  # stretch to alpha = 1
+    slope = beckmann_visible_slopes(ws[2], u)
+    sin_s = wp.sqrt(ws[0] * ws[0] + ws[1] * ws[1])
+    cos_phi = float(1.0)
+    sin_phi = float(0.0)
+    if sin_s > 1.0e-7:
+        cos_phi = ws[0] / sin_s
+        sin_phi = ws[1] / sin_s
+    sx = (cos_phi * slope[0] - sin_phi * slope[1]) * d.alpha_u  # rotate, then unstretch
+    sy = (sin_phi * slope[0] + cos_phi * slope[1]) * d.alpha_v
+    return wp.normalize(wp.vec3(-sx, -sy, 1.0))
 
 
 @wp.func
@@ -101,5 +148,5 @@ def sample_ggx_visible(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
 @wp.func
 def microfacet_sample(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
     if d.kind == MICROFACET_BECKMANN:
-        return sample_beckmann(d, u)
+        return sample_beckmann_visible(d, wi, u)
     return sample_ggx_visible(d, wi, u)

@@ -156,3 +156,30 @@ def test_microfacet_D_projected_area_is_one(kind, au, av):
     wp.launch(ndf_kernel, dim=len(dirs), inputs=[kind, au, av, wp.array(dirs, dtype=wp.vec3, device="cpu"), out], device="cpu")
     integral = (out.numpy().reshape(nt, npp) * np.sin(T)).sum() * (np.pi / 2 / nt) * (2 * np.pi / npp)
     assert abs(integral - 1) < 2e-3
+
+
+@wp.kernel
+def vndf_kernel(kind: int, au: float, av: float, wi: wp.vec3, dirs: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+    i = wp.tid()
+    d = mf.Microfacet()
+    d.kind = kind
+    d.alpha_u = au
+    d.alpha_v = av
+    out[i] = mf.microfacet_pdf(d, wi, dirs[i])
+
+
+@pytest.mark.parametrize("kind,au,av,theta", [(0, 0.1, 0.1, 30), (0, 0.5, 0.5, 75), (0, 0.3, 0.1, 60),
+                                              (1, 0.2, 0.2, 45), (1, 0.6, 0.3, 80)])
+def test_visible_normal_density_integrates_to_one(kind, au, av, theta):
+    """D_wi(m) = G1(wi, m) <wi, m> D(m) / cos(theta_i) is a density over m only with the exact
+    Smith G1 (for Beckmann: the erf form, not the rational fit used in shading)."""
+    nt, npp = 3000, 256
+    t = (np.arange(nt) + 0.5) / nt * (np.pi / 2)
+    p = (np.arange(npp) + 0.5) / npp * 2 * np.pi
+    T, P = np.meshgrid(t, p, indexing="ij")
+    dirs = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3).astype(np.float32)
+    wi = wp.vec3(np.sin(np.radians(theta)) * 0.6, np.sin(np.radians(theta)) * 0.8, np.cos(np.radians(theta)))
+    out = wp.zeros(len(dirs), dtype=float, device="cpu")
+    wp.launch(vndf_kernel, dim=len(dirs), inputs=[kind, au, av, wi, wp.array(dirs, dtype=wp.vec3, device="cpu"), out], device="cpu")
+    integral = (out.numpy().reshape(nt, npp) * np.sin(T)).sum() * (np.pi / 2 / nt) * (2 * np.pi / npp)
+    assert abs(integral - 1) < 3e-3
