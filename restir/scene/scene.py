@@ -389,13 +389,11 @@ class _Builder:
 
     def texture(self, obj) -> int:
         p = self.props(obj, "texture")
-        from ..image_io import read_image
-
         fname = p.string("filename")
         path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
         if not os.path.exists(path):
             raise SceneError(f"texture file '{fname}' not found", p.loc)
-        img = read_image(path, linearize_srgb=not p.bool("raw", False))
+        img = _read_image(path, fname, p.loc, linearize_srgb=not p.bool("raw", False))
         for k in ("filter_type", "wrap_mode"):
             if p.has(k):
                 p.string(k)
@@ -488,19 +486,27 @@ class _Builder:
         if p.type == "constant":
             self.env = ("constant", p.rgb("radiance", np.ones(3)), rot, None)
         else:
-            from ..image_io import read_image
-
             fname = p.string("filename")
             path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
             if not os.path.exists(path):
                 raise SceneError(f"environment map '{fname}' not found", p.loc)
-            img = read_image(path, linearize_srgb=True)
+            img = _read_image(path, fname, p.loc, linearize_srgb=True)
             if img.shape[0] < 3 or img.shape[1] < 2:
                 raise SceneError(f"environment map '{fname}' must be at least 2x3 pixels", p.loc)
-            if not np.all(np.isfinite(img)):
-                raise SceneError(f"environment map '{fname}' contains NaN or inf", p.loc)
             self.env = ("envmap", np.full(3, p.float("scale", 1.0)), rot, img)
         p.warn_unqueried()
+
+
+def _read_image(path: str, fname: str, loc: str, linearize_srgb: bool) -> np.ndarray:
+    from ..image_io import read_image
+
+    try:
+        img = read_image(path, linearize_srgb=linearize_srgb)
+    except Exception as e:  # image libraries raise many exception types for unreadable files
+        raise SceneError(f"cannot read image '{fname}': {e}", loc) from None
+    if not np.all(np.isfinite(img)):
+        raise SceneError(f"image '{fname}' contains NaN or inf", loc)
+    return img
 
 
 def build_scene(tree: dict, name: str = "scene") -> Scene:

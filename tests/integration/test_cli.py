@@ -70,6 +70,16 @@ def test_bad_scene_is_one_line_error(tmp_path, capsys, body, line, message):
     assert message in err
 
 
+def test_unreadable_texture_is_an_error(tmp_path, capsys):
+    (tmp_path / "bad.png").write_bytes(b"not an image")
+    body = '<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">' \
+           '<string name="filename" value="bad.png"/></texture></bsdf></shape>'
+    p = write(tmp_path, MINIMAL.format(body=body))
+    assert main(["render", str(p), "--quiet", "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "cannot read image 'bad.png'" in err and len(err.splitlines()) == 1
+
+
 def test_unknown_parameter_is_a_warning_with_location(tmp_path, capsys):
     p = write(tmp_path, MINIMAL.format(body='<shape type="rectangle"><float name="radiuss" value="1"/></shape>'))
     rc = main(["render", str(p), "-o", str(tmp_path / "x.exr"), "--quiet"])
