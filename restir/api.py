@@ -130,6 +130,8 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
     config = config or RenderConfig()
     config.validate()
     wp = _init_warp()
+    if config.device.startswith("cuda") and wp.get_cuda_device_count() == 0:
+        raise ConfigError(f"device '{config.device}' is not available: no CUDA device on this machine")
     try:
         wp.get_device(config.device)
     except Exception:

@@ -102,6 +102,11 @@ def test_missing_scene_file_and_bad_settings(tmp_path, capsys):
     assert "unknown setting 'bogus'" in capsys.readouterr().err
     assert main(["render", "builtin:nothing", "--quiet"]) == 2
     assert main(["render", "builtin:furnace", "--spp", "0", "--quiet"]) == 2
+    import warp as wp
+
+    if wp.get_cuda_device_count() == 0:
+        assert main(["render", "builtin:furnace", "--device", "cuda", "--quiet"]) == 2
+        assert "no CUDA device" in capsys.readouterr().err
 
 
 def test_defines_override_defaults(tmp_path):
