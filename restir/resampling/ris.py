@@ -1,0 +1,79 @@
+"""Streaming resampled importance sampling (Talbot 2005; GRIS, Lin et al. 2022).
+
+`RisState` is the in-flight state of one resampling pass; it never leaves the pass. A stored
+reservoir keeps W (the unbiased contribution weight) instead of w_sum; the two are different
+fields of different types, so a partly built state cannot be read as a finished reservoir.
+
+For inputs i = 1..n with samples y_i in the current domain, resampling weights
+w_i = m_i(y_i) * p_hat(y_i) * J_i * W_i select y with probability w_i / w_sum, and
+W = w_sum / p_hat(y) (times 1/normalization where the MIS weights are normalized at the end,
+as pairwise MIS's 1/(V+1)). Inputs with zero weight are still inputs: they add their confidence
+M and can never be selected. Non-finite weights are counted and treated as zero, not hidden.
+"""
+import warp as wp
+
+
+@wp.struct
+class RisState:
+    w_sum: float       # running sum of resampling weights
+    p_hat: float       # target of the selected sample in this pass's domain
+    M: float           # confidence accumulated from all inputs
+    selected: int      # caller's index of the selected input, -1 while none
+    nonfinite: int     # inputs whose weight was NaN or inf (counted, then treated as 0)
+
+
+@wp.func
+def ris_init() -> RisState:
+    s = RisState()
+    s.w_sum = 0.0
+    s.p_hat = 0.0
+    s.M = 0.0
+    s.selected = -1
+    s.nonfinite = 0
+    return s
+
+
+@wp.func
+def is_finite(x: float) -> bool:
+    return x == x and wp.abs(x) < 3.0e38
+
+
+@wp.func
+def ris_stream(s: RisState, w: float, p_hat: float, M: float, index: int, u: float) -> RisState:
+    """Stream one input (resampling weight w, target p_hat of its sample, confidence M).
+
+    u is this input's own uniform number from the pass's resampling stream. Returns the new
+    state; the input was selected iff the returned state's `selected` equals `index`.
+    """
+    r = s
+    r.M = s.M + M
+    weight = w
+    if not is_finite(weight):
+        r.nonfinite = s.nonfinite + 1
+        weight = 0.0
+    if weight > 0.0:
+        r.w_sum = s.w_sum + weight
+        if u * r.w_sum < weight:
+            r.selected = index
+            r.p_hat = p_hat
+    return r
+
+
+@wp.func
+def ris_contribution_weight(s: RisState, normalization: float) -> float:
+    """W = w_sum / (p_hat(y) * normalization); 0 when nothing was selected."""
+    if s.selected < 0 or s.p_hat <= 0.0 or normalization <= 0.0:
+        return 0.0
+    W = s.w_sum / (s.p_hat * normalization)
+    if not is_finite(W):
+        return 0.0
+    return W
+
+
+@wp.func
+def cap_confidence(M: float, cap: float) -> float:
+    """The one place confidences are capped (cap <= 0: no cap). The capped value must be used
+    consistently in every MIS weight that mentions this input."""
+    if cap > 0.0:
+        return wp.min(M, cap)
+    return M
