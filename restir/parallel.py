@@ -6,6 +6,10 @@ a thread pool; every pixel kernel takes `offset` as its first argument and handl
 wp.tid() + offset. Pixels never read each other's outputs within a launch (ping-pong), and the
 random numbers are counter-based, so the result is bitwise independent of the slicing.
 On CUDA the launch is one grid.
+
+Consequence: Warp's atomics are not atomic between CPU slices (Warp assumes one host thread
+per launch), so a kernel launched here must not accumulate into shared memory with atomics;
+it writes per-item outputs that are reduced afterwards.
 """
 import os
 from concurrent.futures import ThreadPoolExecutor
