@@ -110,8 +110,11 @@ def make_integrator(scene: Scene, config: RenderConfig):
         raise ConfigError(f"unknown method '{config.method}' (available: {', '.join(METHODS)})")
     cls = METHODS[config.method]
     settings = method_settings(cls.SETTINGS, config.settings)
-    settings.update(seed=config.seed, spp=config.spp or scene.spp,
-                    max_depth=config.max_depth if config.max_depth is not None else scene.max_depth,
+    fixed = getattr(cls, "FIXED_MAX_DEPTH", None)
+    if fixed is not None and config.max_depth not in (None, fixed):
+        raise ConfigError(f"method '{config.method}' computes max_depth {fixed} (direct illumination) only")
+    max_depth = fixed or (config.max_depth if config.max_depth is not None else scene.max_depth)
+    settings.update(seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
                     rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     if hasattr(cls, "check_settings"):
         cls.check_settings(settings)

@@ -25,7 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene")
     r.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (cornell-box, cornell-box-glossy, furnace, sphere-cap)")
-    r.add_argument("--method", default="pt", help="pt (more methods follow)")
+    r.add_argument("--method", default="pt", help="pt (path tracer) or restir-di (direct light; canonical resampling so far)")
     r.add_argument("--spp", type=int, help="samples per pixel per frame (default: the scene's)")
     r.add_argument("--frames", type=int, default=1, help="frames to render and average")
     r.add_argument("--width", type=int)

@@ -23,6 +23,7 @@ class SurfaceHit:
     ns: wp.vec3    # unit shading normal
     uv: wp.vec2
     tri: int
+    bary: wp.vec2  # Warp barycentrics (weights of corners 0 and 1): (tri, bary, t) rebuild the hit
 
 
 @wp.func
@@ -44,6 +45,7 @@ def surface_at(scene: SceneDevice, tri: int, bu: float, bv: float, t: float) -> 
     h.valid = 1
     h.t = t
     h.tri = tri
+    h.bary = wp.vec2(bu, bv)
     h.p = p0 * bu + p1 * bv + p2 * bw
     h.ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
     h.ns = h.ng

@@ -17,6 +17,8 @@ class LightSample:
     dist: float      # distance to the light point (T_MAX-like for the environment)
     p: wp.vec3       # light point (surface lights)
     n: wp.vec3       # geometric normal at the light point
+    ns: wp.vec3      # shading normal at the light point (decides the emitting side)
+    tri: int         # emissive triangle, -1 for the environment
     Le: wp.vec3      # emitted radiance toward the shading point
     pdf: float       # solid-angle density, selection probability included; 0 = failed
     is_env: int
@@ -105,6 +107,7 @@ def env_pdf(scene: SceneDevice, d_world: wp.vec3) -> float:
 def sample_env(scene: SceneDevice, u: wp.vec2) -> LightSample:
     ls = LightSample()
     ls.is_env = 1
+    ls.tri = -1
     ls.dist = 1.0e30
     ls.pdf = 0.0
     if scene.env_kind == ENV_CONSTANT:
@@ -154,6 +157,7 @@ def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.ve
     ls.pdf = 0.0
     k = sample_alias(scene.light_prob, scene.light_alias, u_sel)
     tri = int(scene.light_tri[k])
+    ls.tri = tri
     b = square_to_uniform_triangle(u)
     i0 = 3 * tri
     p0 = scene.positions[i0]
@@ -166,6 +170,7 @@ def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.ve
         n = scene.normals[i0] * (1.0 - b[0] - b[1]) + scene.normals[i0 + 1] * b[0] + scene.normals[i0 + 2] * b[1]
         if wp.length(n) > 0.0:
             ns = wp.normalize(n)
+    ls.ns = ns
     d = ls.p - x
     dist = wp.length(d)
     if dist <= 0.0:

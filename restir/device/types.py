@@ -32,6 +32,9 @@ STRATEGY_BSDF = wp.constant(2)
 
 # Random-stream stage ids: no two stages share a stream.
 STAGE_PATH_TRACE = wp.constant(1)
+STAGE_DI_GBUFFER = wp.constant(10)
+STAGE_DI_INITIAL = wp.constant(11)
+STAGE_DI_SHADE = wp.constant(12)
 
 # Random dimensions within one sample: DIMS_PER_BOUNCE numbers per bounce.
 DIMS_PER_BOUNCE = wp.constant(8)

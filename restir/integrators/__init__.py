@@ -1,4 +1,5 @@
 """Integrators (methods). Each is a pipeline of stages; `METHODS` maps CLI names to classes."""
 from .path import PathTracer
+from .restir_di.pipeline import ReSTIRDI
 
-METHODS = {"pt": PathTracer}
+METHODS = {"pt": PathTracer, "restir-di": ReSTIRDI}

@@ -4,7 +4,12 @@ import importlib
 import pytest
 import warp as wp
 
-KERNEL_MODULES = ["restir.integrators.path"]
+KERNEL_MODULES = [
+    "restir.integrators.path",
+    "restir.integrators.restir_di.s1_gbuffer",
+    "restir.integrators.restir_di.s2_initial",
+    "restir.integrators.restir_di.s5_shade",
+]
 
 
 @pytest.mark.parametrize("module", KERNEL_MODULES)
@@ -25,6 +30,6 @@ def test_every_kernel_module_is_listed():
         if m.name.endswith("__main__"):
             continue
         mod = importlib.import_module(m.name)
-        if any(isinstance(v, wp.Kernel) for v in vars(mod).values()):
+        if any(isinstance(v, wp.Kernel) and v.module.name == m.name for v in vars(mod).values()):
             found.add(m.name)
     assert found == set(KERNEL_MODULES)

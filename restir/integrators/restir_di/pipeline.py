@@ -1,0 +1,75 @@
+"""ReSTIR DI as a pipeline of stages (this commit: canonical resampling; reuse stages follow).
+
+render_frame is the table of contents; each stage is one kernel in its own file.
+"""
+import numpy as np
+import warp as wp
+
+from ...parallel import launch_pixels
+from ..base import Integrator
+from .params import DIParams
+from .reservoir import DIReservoir
+from .s1_gbuffer import gbuffer_kernel
+from .s2_initial import initial_kernel
+from .s5_shade import shade_kernel
+
+
+class ReSTIRDI(Integrator):
+    name = "restir-di"
+    STAGES = ("gbuffer", "initial", "shade")
+    KERNELS = (gbuffer_kernel, initial_kernel, shade_kernel)
+    SETTINGS = {"candidates": 32}
+    FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
+
+    @staticmethod
+    def check_settings(settings: dict) -> None:
+        from ...config import ConfigError
+
+        if settings["candidates"] < 1:
+            raise ConfigError("candidates must be >= 1")
+
+    def allocate(self) -> None:
+        self.gb_tri = self.buffer("gb_tri", wp.int32)
+        self.gb_bary = self.buffer("gb_bary", wp.vec2)
+        self.gb_t = self.buffer("gb_t", float)
+        self.gb_dir = self.buffer("gb_dir", wp.vec3)
+        self.gb_weight = self.buffer("gb_weight", float)
+        self.emission = self.buffer("emission", wp.vec3)
+        self.reservoirs = self.buffer("reservoirs", DIReservoir)
+        self.sample_L = self.buffer("sample_L", wp.vec3)
+        self.shade_rays = self.buffer("shade_rays", wp.int32)
+
+    def params(self, frame: int, sample: int) -> DIParams:
+        p = DIParams()
+        p.seed = wp.uint32(self.settings["seed"] & 0xFFFFFFFF)
+        p.frame = wp.uint32(frame)
+        p.sample = sample
+        p.candidates = int(self.settings["candidates"])
+        p.hide_emitters = int(bool(self.settings["hide_emitters"]))
+        return p
+
+    def launch(self, stage: str, kernel, inputs: list, outputs: list) -> None:
+        with self.timer.stage(stage):
+            launch_pixels(kernel, self.num_pixels, inputs, outputs, self.device, self.slices)
+
+    def render_frame(self, frame: int):
+        sc = self.dscene.scene
+        gb = [self.gb_tri, self.gb_bary, self.gb_t, self.gb_dir]
+        n, mean, m2 = 0, None, None
+        for s in range(self.settings["spp"]):
+            p = self.params(frame, s)
+            self.launch("gbuffer", gbuffer_kernel, [sc, self.dscene.camera, p], [*gb, self.gb_weight, self.emission])
+            self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
+            self.launch("shade", shade_kernel, [sc, p, *gb, self.gb_weight, self.emission, self.reservoirs],
+                        [self.sample_L, self.shade_rays])
+            self.rays += self.num_pixels + int(self.shade_rays.numpy().sum(dtype=np.int64))  # primary + shade
+            L = self.sample_L.numpy().astype(np.float64)
+            n += 1
+            if mean is None:
+                mean, m2 = L.copy(), np.zeros_like(L)
+            else:
+                delta = L - mean
+                mean += delta / n
+                m2 += delta * (L - mean)
+        shape = (self.height, self.width, 3)
+        return mean.reshape(shape).astype(np.float32), (m2 / n).reshape(shape)

@@ -1,0 +1,88 @@
+"""The stored ReSTIR DI reservoir and the integrand it is resampled by.
+
+A sample y is a point on an emissive triangle (area measure) or a direction toward the
+environment (solid-angle measure), so moving it to another pixel's primary hit is the identity
+in its measure (J = 1). The integrand at a primary hit x (smooth BSDF lobes only):
+
+    f_x(y) = f_s(x, wo, w_y) * Le(y -> x) * G(x, y) * V(x, y),   G = |cos theta_y| / d^2 (1 for env)
+
+`unshadowed_contribution` is f_x without V; the target is p_hat = luminance of it.
+"""
+import warp as wp
+
+from ...device.bsdf import Material, bsdf_eval
+from ...device.intersect import SurfaceHit, T_MAX, is_visible, offset_origin
+from ...device.lights import env_eval, triangle_emission
+from ...device.sampling import Frame, to_local
+from ...device.scene_device import SceneDevice
+
+
+@wp.struct
+class DIReservoir:
+    light_y: wp.vec3    # point on the light, or unit direction toward the environment
+    light_n: wp.vec3    # geometric normal of the light triangle (area measure)
+    light_ns: wp.vec3   # shading normal there (decides the emitting side)
+    light_tri: int      # emissive triangle, -1: environment, -2: no sample
+    W: float            # unbiased contribution weight, in the sample's measure
+    M: float            # confidence
+
+
+@wp.func
+def empty_reservoir() -> DIReservoir:
+    r = DIReservoir()
+    r.light_tri = -2
+    r.W = 0.0
+    r.M = 0.0
+    return r
+
+
+@wp.func
+def luminance(c: wp.vec3) -> float:
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+
+
+@wp.func
+def direction_to_light(r: DIReservoir, x: wp.vec3) -> wp.vec4:
+    """(unit direction x -> y, distance); distance T_MAX for the environment."""
+    if r.light_tri == -1:
+        return wp.vec4(r.light_y[0], r.light_y[1], r.light_y[2], T_MAX)
+    d = r.light_y - x
+    dist = wp.length(d)
+    if dist <= 0.0:
+        return wp.vec4(0.0, 0.0, 1.0, 0.0)
+    d = d / dist
+    return wp.vec4(d[0], d[1], d[2], dist)
+
+
+@wp.func
+def unshadowed_contribution(scene: SceneDevice, hit: SurfaceHit, frame: Frame, wi: wp.vec3, mat: Material,
+                            r: DIReservoir) -> wp.vec3:
+    """f_s * Le * G at the primary hit (no visibility); 0 for no sample."""
+    if r.light_tri == -2:
+        return wp.vec3(0.0)
+    dd = direction_to_light(r, hit.p)
+    d = wp.vec3(dd[0], dd[1], dd[2])
+    if dd[3] <= 0.0:
+        return wp.vec3(0.0)
+    Le = wp.vec3(0.0)
+    G = float(1.0)
+    if r.light_tri == -1:
+        Le = env_eval(scene, d)
+    else:
+        Le = triangle_emission(scene, r.light_tri, r.light_ns, -d)
+        G = wp.abs(wp.dot(r.light_n, d)) / (dd[3] * dd[3])
+    f = bsdf_eval(mat, wi, to_local(frame, d))
+    return wp.cw_mul(f, Le) * G
+
+
+@wp.func
+def light_visible(scene: SceneDevice, hit: SurfaceHit, r: DIReservoir) -> bool:
+    dd = direction_to_light(r, hit.p)
+    d = wp.vec3(dd[0], dd[1], dd[2])
+    origin = offset_origin(hit.p, hit.ng, d)
+    if r.light_tri == -1:
+        return is_visible(scene, origin, d, T_MAX)
+    target = offset_origin(r.light_y, r.light_n, -d)
+    seg = target - origin
+    dist = wp.length(seg)
+    return dist > 0.0 and is_visible(scene, origin, seg / dist, dist)

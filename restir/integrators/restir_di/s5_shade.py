@@ -1,0 +1,61 @@
+"""Stage 5, shading: the pixel's estimate of direct illumination (max_depth 2).
+
+L = emission + f_s Le G V(y) W  (the resampled smooth part; V traced here)
+      + the delta lobes' direct light, by BSDF sampling (kept only when a delta lobe is chosen;
+        the smooth lobes are the resampled part's), all times the filter weight.
+Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, shade_rays.
+"""
+import warp as wp
+
+from ...device.bsdf import bsdf_sample
+from ...device.intersect import T_MAX, offset_origin, surface_at, trace_closest
+from ...device.lights import env_eval, triangle_emission
+from ...device.rng import rng_key, rng_uniform, rng_uniform2
+from ...device.sampling import frame_from_normal, to_local, to_world
+from ...device.scene_device import SceneDevice, material_at
+from ...device.types import DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_SHADE
+from .params import DIParams
+from .reservoir import DIReservoir, light_visible, unshadowed_contribution
+
+
+@wp.kernel
+def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
+                 gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
+                 gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
+                 reservoirs: wp.array(dtype=DIReservoir), sample_L: wp.array(dtype=wp.vec3),
+                 shade_rays: wp.array(dtype=wp.int32)):
+    pixel = wp.tid() + offset
+    L = emission[pixel]
+    rays = int(0)
+    tri = gb_tri[pixel]
+    if tri >= 0:
+        b = gb_bary[pixel]
+        hit = surface_at(scene, tri, b[0], b[1], gb_t[pixel])
+        mat = material_at(scene, tri, hit.uv)
+        frame = frame_from_normal(hit.ns)
+        wi = to_local(frame, -gb_dir[pixel])
+        weight = gb_weight[pixel]
+        # ---- resampled smooth part
+        r = reservoirs[pixel]
+        if r.W > 0.0:
+            f = unshadowed_contribution(scene, hit, frame, wi, mat, r)
+            if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
+                rays += 1
+                if light_visible(scene, hit, r):
+                    L += f * (r.W * weight)
+        # ---- delta lobes: one BSDF sample, kept when it chose a delta lobe
+        key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_SHADE), wp.uint32(pixel))
+        base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
+        bs = bsdf_sample(mat, wi, rng_uniform(key, base), rng_uniform2(key, base + wp.uint32(1)))
+        if bs.valid != 0 and bs.is_delta != 0:
+            d = wp.normalize(to_world(frame, bs.wo))
+            h2 = trace_closest(scene, offset_origin(hit.p, hit.ng, d), d, T_MAX)
+            rays += 1
+            Le = wp.vec3(0.0)
+            if h2.valid != 0:
+                Le = triangle_emission(scene, h2.tri, h2.ns, -d)
+            elif scene.env_kind != ENV_NONE:
+                Le = env_eval(scene, d)
+            L += wp.cw_mul(bs.weight, Le) * weight
+    sample_L[pixel] = L
+    shade_rays[pixel] = rays
