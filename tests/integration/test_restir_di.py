@@ -13,6 +13,8 @@ FRAMES = 32
 
 
 def scene_for(name, tmp_path):
+    if name == "half-dark":
+        return half_dark_scene()
     if name == "features":
         from tests.data.feature_scene import write_feature_scene
 
@@ -20,15 +22,40 @@ def scene_for(name, tmp_path):
     return restir.load_scene(f"builtin:{name}")
 
 
-def render(scene, method, spp, seed, **settings):
-    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=24, height=24, seed=seed,
+def render(scene, method, spp, seed, size=24, **settings):
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=size, height=size, seed=seed,
                               max_depth=2, settings=settings)
-    return restir.render(scene, cfg)
+    r = restir.render(scene, cfg)
+    if method == "restir-di" and "debug.mutation" not in settings:
+        assert r.stats["settings"]["debug.mutation"] == "none"  # the unbiased build, asserted
+    return r
+
+
+def half_dark_scene():
+    """A floor lit by a light above it (facing down) and an equally bright light beside it facing
+    up, at nothing: about half of all light candidates have zero contribution (TESTING.md C6,
+    the target of defects A1 and A3). The camera looks at the floor from below the lights."""
+    from restir.scene.scene import build_scene
+    from restir.scene.transforms import look_at
+    from tests.scenes import sensor, triangle
+
+    def quad(cx, y, s, up):
+        a, b, c, d = [cx - s, y, -s], [cx + s, y, -s], [cx + s, y, s], [cx - s, y, s]
+        tris = ([a, b, c], [a, c, d]) if up else ([a, c, b], [a, d, c])
+        return [triangle(t, [10, 10, 10]) for t in tris]
+
+    floor = [triangle([[-4, -1, -4], [4, -1, 4], [4, -1, -4]]), triangle([[-4, -1, -4], [-4, -1, 4], [4, -1, 4]])]
+    parts = floor + quad(0.0, 1.5, 0.6, up=False) + quad(3.0, 1.5, 0.6, up=True)
+    tree = {"type": "scene", "sensor": sensor(24, 24)}
+    tree["sensor"]["to_world"] = look_at([0, 0.3, -3.0], [0, -1, 0.5], [0, 1, 0])
+    tree.update({f"p{i}": part for i, part in enumerate(parts)})
+    return build_scene(tree, "half-dark")
 
 
 # (DI spp, PT spp, MDB bound): in the Cornell boxes the pixels on the edge of the small, bright
 # light dominate the image-level variance of both sides.
-SAMPLES = {"cornell-box": (32, 128, 0.05), "cornell-box-glossy": (32, 128, 0.05), "features": (8, 32, 0.03)}
+SAMPLES = {"cornell-box": (32, 128, 0.05), "cornell-box-glossy": (32, 128, 0.05), "features": (8, 32, 0.03),
+           "half-dark": (8, 32, 0.03)}
 
 
 @pytest.mark.parametrize("candidates", [1, 4, 32])
@@ -36,8 +63,40 @@ SAMPLES = {"cornell-box": (32, 128, 0.05), "cornell-box-glossy": (32, 128, 0.05)
 def test_canonical_matches_direct_path_tracing(name, candidates, tmp_path):
     scene = scene_for(name, tmp_path)
     spp_di, spp_pt, bound = SAMPLES[name]
-    di = render(scene, "restir-di", spp_di, seed=3, candidates=candidates)
+    di = render(scene, "restir-di", spp_di, seed=3, candidates=candidates, **{"spatial.rounds": 0})
     pt = render(scene, "pt", spp_pt, seed=4)
     print(name, f"candidates={candidates}")
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     assert rep.mdb < bound
+
+
+SPATIAL = {"k1-r1": (1, 1), "k3-r2": (3, 2), "k8-r1": (8, 1), "k4-r3": (4, 3)}
+
+
+@pytest.mark.parametrize("config", list(SPATIAL))
+@pytest.mark.parametrize("name", ["cornell-box", "features", "half-dark"])
+def test_spatial_reuse_matches_direct_path_tracing(name, config, tmp_path):
+    k, rounds = SPATIAL[config]
+    scene = scene_for(name, tmp_path)
+    spp_di, spp_pt, bound = SAMPLES.get(name, (8, 32, 0.03))
+    di = render(scene, "restir-di", spp_di, seed=5, candidates=1 if name == "half-dark" else 4,
+                **{"spatial.neighbors": k, "spatial.rounds": rounds})
+    pt = render(scene, "pt", spp_pt, seed=6)
+    print(name, config)
+    rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
+    assert rep.mdb < bound
+
+
+@pytest.mark.parametrize("mutation", ["drop_empty_neighbors", "skip_zero_canonical"])
+def test_mutations_are_detected(mutation):
+    """Power check (TESTING.md 5.11): defects A3 and A1 must fail the same comparison.
+
+    At 4x the samples of the unbiasedness test, the mutants' image-level |z| is about 8.8 (A3,
+    brighter) and 8.5 (A1, darker) against a threshold of 3.8: detected with probability > 0.99.
+    """
+    scene = half_dark_scene()
+    settings = {"candidates": 1, "spatial.neighbors": 4, "spatial.rounds": 1, "debug.mutation": mutation}
+    di = render(scene, "restir-di", 32, seed=5, **settings)
+    pt = render(scene, "pt", 128, seed=6)
+    with pytest.raises(AssertionError):
+        check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)

@@ -9,3 +9,8 @@ class DIParams:
     sample: int          # sample index within the frame (spp > 1 repeats the pipeline)
     candidates: int      # initial light candidates per pixel
     hide_emitters: int
+    spatial_round: int   # index of the spatial round being run
+    spatial_k: int       # configured neighbour count (enters the pairwise weights)
+    spatial_radius: float  # neighbour search radius in pixels
+    mut_drop_empty: int  # mutation A3 (tests only): exclude empty neighbours from k
+    mut_skip_zero_canonical: int  # mutation A1 (tests only): no reuse when the canonical is 0

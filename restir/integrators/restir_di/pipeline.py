@@ -1,4 +1,4 @@
-"""ReSTIR DI as a pipeline of stages (this commit: canonical resampling; reuse stages follow).
+"""ReSTIR DI as a pipeline of stages: G-buffer, initial RIS, spatial reuse rounds, shading.
 
 render_frame is the table of contents; each stage is one kernel in its own file.
 """
@@ -11,14 +11,19 @@ from .params import DIParams
 from .reservoir import DIReservoir
 from .s1_gbuffer import gbuffer_kernel
 from .s2_initial import initial_kernel
+from .s4_spatial import spatial_kernel
 from .s5_shade import shade_kernel
 
 
 class ReSTIRDI(Integrator):
     name = "restir-di"
-    STAGES = ("gbuffer", "initial", "shade")
-    KERNELS = (gbuffer_kernel, initial_kernel, shade_kernel)
-    SETTINGS = {"candidates": 32}
+    STAGES = ("gbuffer", "initial", "spatial", "shade")
+    KERNELS = (gbuffer_kernel, initial_kernel, spatial_kernel, shade_kernel)
+    # Literature defaults (see docs/restir_di.md): 32 light candidates; spatial reuse with 3
+    # neighbours in a 30 px radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
+    SETTINGS = {"candidates": 32, "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": 30.0,
+                "debug.mutation": "none"}
+    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical")
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
     @staticmethod
@@ -27,6 +32,12 @@ class ReSTIRDI(Integrator):
 
         if settings["candidates"] < 1:
             raise ConfigError("candidates must be >= 1")
+        if not 0 <= settings["spatial.rounds"] <= 8 or not 1 <= settings["spatial.neighbors"] <= 32:
+            raise ConfigError("spatial.rounds must be in [0, 8] and spatial.neighbors in [1, 32]")
+        if settings["spatial.radius"] <= 0:
+            raise ConfigError("spatial.radius must be positive")
+        if settings["debug.mutation"] not in ReSTIRDI.MUTATIONS:
+            raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
 
     def allocate(self) -> None:
         self.gb_tri = self.buffer("gb_tri", wp.int32)
@@ -36,6 +47,7 @@ class ReSTIRDI(Integrator):
         self.gb_weight = self.buffer("gb_weight", float)
         self.emission = self.buffer("emission", wp.vec3)
         self.reservoirs = self.buffer("reservoirs", DIReservoir)
+        self.reservoirs_back = self.buffer("reservoirs_back", DIReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
         self.shade_rays = self.buffer("shade_rays", wp.int32)
 
@@ -46,6 +58,12 @@ class ReSTIRDI(Integrator):
         p.sample = sample
         p.candidates = int(self.settings["candidates"])
         p.hide_emitters = int(bool(self.settings["hide_emitters"]))
+        p.spatial_round = 0
+        p.spatial_k = int(self.settings["spatial.neighbors"])
+        p.spatial_radius = float(self.settings["spatial.radius"])
+        mutation = self.settings["debug.mutation"]
+        p.mut_drop_empty = int(mutation == "drop_empty_neighbors")
+        p.mut_skip_zero_canonical = int(mutation == "skip_zero_canonical")
         return p
 
     def launch(self, stage: str, kernel, inputs: list, outputs: list) -> None:
@@ -60,6 +78,11 @@ class ReSTIRDI(Integrator):
             p = self.params(frame, s)
             self.launch("gbuffer", gbuffer_kernel, [sc, self.dscene.camera, p], [*gb, self.gb_weight, self.emission])
             self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
+            for rd in range(self.settings["spatial.rounds"]):
+                p.spatial_round = rd
+                self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
+                            [self.reservoirs_back])
+                self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs  # ping-pong
             self.launch("shade", shade_kernel, [sc, p, *gb, self.gb_weight, self.emission, self.reservoirs],
                         [self.sample_L, self.shade_rays])
             self.rays += self.num_pixels + int(self.shade_rays.numpy().sum(dtype=np.int64))  # primary + shade

@@ -1,0 +1,40 @@
+"""Reading a pixel's primary hit back from the G-buffer (shared by every reuse stage)."""
+import warp as wp
+
+from ...device.bsdf import Material
+from ...device.intersect import SurfaceHit, surface_at
+from ...device.sampling import Frame, frame_from_normal, to_local
+from ...device.scene_device import SceneDevice, material_at
+
+
+@wp.struct
+class Shading:
+    """Everything the target p_hat needs at one primary hit."""
+    valid: int
+    hit: SurfaceHit
+    frame: Frame
+    wi: wp.vec3      # direction to the camera, local
+    mat: Material
+
+
+@wp.func
+def load_shading(scene: SceneDevice, gb_tri: wp.array(dtype=wp.int32), gb_bary: wp.array(dtype=wp.vec2),
+                 gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3), pixel: int) -> Shading:
+    s = Shading()
+    tri = gb_tri[pixel]
+    s.valid = 0
+    if tri < 0:
+        return s
+    b = gb_bary[pixel]
+    s.hit = surface_at(scene, tri, b[0], b[1], gb_t[pixel])
+    s.mat = material_at(scene, tri, s.hit.uv)
+    s.frame = frame_from_normal(s.hit.ns)
+    s.wi = to_local(s.frame, -gb_dir[pixel])
+    s.valid = 1
+    return s
+
+
+@wp.func
+def similar_surfaces(a: Shading, b: Shading) -> bool:
+    """Neighbour test on geometry only (ReSTIR PT's): normals within 60 deg, depth within 10%."""
+    return wp.dot(a.hit.ns, b.hit.ns) >= 0.5 and wp.abs(a.hit.t - b.hit.t) < 0.1 * a.hit.t
