@@ -23,7 +23,7 @@ class ReSTIRDI(Integrator):
     # neighbours in a 30 px radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
     SETTINGS = {"candidates": 32, "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": 30.0,
                 "debug.mutation": "none"}
-    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical")
+    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place")
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
     @staticmethod
@@ -80,6 +80,10 @@ class ReSTIRDI(Integrator):
             self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
             for rd in range(self.settings["spatial.rounds"]):
                 p.spatial_round = rd
+                if self.settings["debug.mutation"] == "spatial_in_place":  # race, for the R2 test only
+                    self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
+                                [self.reservoirs])
+                    continue
                 self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
                             [self.reservoirs_back])
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs  # ping-pong
