@@ -115,6 +115,7 @@ def make_integrator(scene: Scene, config: RenderConfig):
         raise ConfigError(f"method '{config.method}' computes max_depth {fixed} (direct illumination) only")
     max_depth = fixed or (config.max_depth if config.max_depth is not None else scene.max_depth)
     settings.update(seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
+                    camera_motion=config.camera_motion, camera_speed=config.camera_speed,
                     rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     if hasattr(cls, "check_settings"):
         cls.check_settings(settings)

@@ -35,6 +35,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
     r.add_argument("--tracer", default="auto", choices=["auto", "embree", "warp"],
                    help="CPU ray tracer (auto: Embree if available; CUDA always uses Warp's BVH)")
+    r.add_argument("--camera-motion", default="none", choices=["none", "orbit", "dolly"],
+                   help="scripted camera motion over the frames (the scene stays static)")
+    r.add_argument("--camera-speed", type=float, default=1.0,
+                   help="orbit: degrees per frame; dolly: scene diagonals per frame")
     r.add_argument("-D", dest="defines", action="append", type=_key_value, default=[], metavar="NAME=VALUE",
                    help="override a scene <default> (as Mitsuba's -D)")
     r.add_argument("--set", dest="settings", action="append", type=_key_value, default=[], metavar="KEY=VALUE",
@@ -58,6 +62,7 @@ def _render(args) -> int:
     console = Console(stderr=True, quiet=args.quiet)
     config = RenderConfig(method=args.method, spp=args.spp, frames=args.frames, width=args.width,
                           height=args.height, max_depth=args.max_depth, seed=args.seed, device=args.device, tracer=args.tracer,
+                          camera_motion=args.camera_motion, camera_speed=args.camera_speed,
                           settings=dict(args.settings))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)

@@ -23,6 +23,8 @@ class RenderConfig:
     settings: dict = field(default_factory=dict)   # method settings (see each method's SETTINGS)
     slices: int | None = None       # CPU launch slices (None: one per core)
     tracer: str = "auto"            # "auto" (Embree on the CPU if available), "embree", "warp"
+    camera_motion: str = "none"     # "none", "orbit" (speed: degrees/frame), "dolly" (speed: scene sizes/frame)
+    camera_speed: float = 1.0
 
     def validate(self) -> None:
         if self.spp is not None and self.spp < 1:
@@ -35,6 +37,8 @@ class RenderConfig:
                 raise ConfigError(f"{k} must be >= 1")
         if self.max_depth is not None and (self.max_depth == 0 or self.max_depth < -1):
             raise ConfigError("max_depth must be -1 (unbounded) or >= 1")
+        if self.camera_motion not in ("none", "orbit", "dolly"):
+            raise ConfigError("camera_motion must be none, orbit or dolly")
         if self.tracer not in ("auto", "embree", "warp"):
             raise ConfigError("tracer must be auto, embree or warp")
         if not 0 <= self.seed < 2**32:

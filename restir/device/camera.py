@@ -13,6 +13,7 @@ from .types import FILTER_BOX, FILTER_TENT
 @wp.struct
 class Camera:
     to_world: wp.mat44
+    to_local: wp.mat44
     tan_half_x: float
     tan_half_y: float
     width: int
@@ -69,3 +70,15 @@ def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
     r.d = wp.normalize(wp.transform_vector(cam.to_world, d_local))
     r.weight = fx[1] * fy[1]
     return r
+
+
+@wp.func
+def project_to_pixel(cam: Camera, p: wp.vec3) -> wp.vec2:
+    """Continuous pixel coordinates of world point p (pixel centres at i + 0.5); (-1, -1) when
+    p is behind the camera. Inverse of generate_ray's mapping."""
+    q = wp.transform_point(cam.to_local, p)
+    if q[2] <= 0.0:
+        return wp.vec2(-1.0, -1.0)
+    sx = 0.5 * (1.0 - q[0] / (q[2] * cam.tan_half_x))
+    sy = 0.5 * (1.0 - q[1] / (q[2] * cam.tan_half_y))
+    return wp.vec2(sx * float(cam.width), sy * float(cam.height))

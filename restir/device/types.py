@@ -35,6 +35,7 @@ STAGE_PATH_TRACE = wp.constant(1)
 STAGE_DI_GBUFFER = wp.constant(10)
 STAGE_DI_INITIAL = wp.constant(11)
 STAGE_DI_SHADE = wp.constant(12)
+STAGE_DI_TEMPORAL = wp.constant(13)
 STAGE_DI_SPATIAL = wp.constant(20)  # + round index
 
 # Random dimensions within one sample: DIMS_PER_BOUNCE numbers per bounce.

@@ -18,6 +18,8 @@ class Integrator:
         self.device = wp.get_device(device)
         self.slices = slices
         self.timer = StageTimer(self.device)
+        for stage in self.STAGES:  # report stages in pipeline order, including unused ones
+            self.timer.ms[stage] = 0.0
         self.buffers = BufferRegistry()
         cam = dscene.host.camera
         self.width, self.height = cam.width, cam.height
@@ -26,6 +28,17 @@ class Integrator:
         self.allocate()
         for k in self.KERNELS:
             wp.load_module(k.module, device=self.device)
+
+    def camera(self, frame: int):
+        """The device camera of `frame` (scripted motion from the settings, if any)."""
+        from ..camera_motion import camera_pose
+
+        motion = self.settings.get("camera_motion", "none")
+        if motion == "none":
+            return self.dscene.camera
+        host = self.dscene.host
+        pose = camera_pose(host.camera.to_world, host.bounds(), motion, self.settings["camera_speed"], frame)
+        return self.dscene.camera_at(pose)
 
     def buffer(self, name: str, dtype, shape=None):
         a = wp.zeros(shape or self.num_pixels, dtype=dtype, device=self.device)

@@ -208,7 +208,7 @@ class PathTracer(Integrator):
     def render_frame(self, frame: int):
         with self.timer.stage("path_trace"):
             launch_pixels(path_trace_kernel, self.num_pixels,
-                          inputs=[self.dscene.scene, self.dscene.camera, self.params(frame)],
+                          inputs=[self.dscene.scene, self.camera(frame), self.params(frame)],
                           outputs=[self.frame_mean, self.frame_var, self.frame_rays], device=self.device, slices=self.slices)
         self.rays += int(self.frame_rays.numpy().sum(dtype=np.int64))
         shape = (self.height, self.width, 3)

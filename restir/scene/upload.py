@@ -145,6 +145,7 @@ class DeviceScene:
     def camera_struct(self, cd) -> Camera:
         c = Camera()
         c.to_world = wp.mat44(*cd.to_world.astype(np.float32).reshape(-1))
+        c.to_local = wp.mat44(*np.linalg.inv(cd.to_world).astype(np.float32).reshape(-1))
         tx, ty = cd.tan_half()
         c.tan_half_x, c.tan_half_y = float(tx), float(ty)
         c.width, c.height = int(cd.width), int(cd.height)
@@ -160,6 +161,17 @@ class DeviceScene:
         c.filter_cdf = self._arr(cdf_1d(bins).astype(np.float32), float)
         c.filter_bins = n
         c.filter_inv_integral = float(1.0 / bins.sum())
+        return c
+
+    def camera_at(self, to_world: np.ndarray) -> Camera:
+        """The camera with another pose (scripted motion); filter tables are shared."""
+        c = Camera()
+        base = self.camera
+        for name in ("tan_half_x", "tan_half_y", "width", "height", "filter", "filter_radius", "filter_cdf",
+                     "filter_bins", "filter_stddev", "filter_inv_integral"):
+            setattr(c, name, getattr(base, name))
+        c.to_world = wp.mat44(*np.asarray(to_world, np.float32).reshape(-1))
+        c.to_local = wp.mat44(*np.linalg.inv(to_world).astype(np.float32).reshape(-1))
         return c
 
     def memory_bytes(self) -> int:

@@ -4,6 +4,7 @@ Both sides noisy: Welch z per channel over 32 frames (batch means), alpha = 1e-3
 configuration, image/tile/pixel levels as tests/stats.py; the MDB is asserted small.
 This commit covers the canonical (initial RIS) stage; reuse stages add their configurations.
 """
+import numpy as np
 import pytest
 
 import restir
@@ -63,7 +64,7 @@ SAMPLES = {"cornell-box": (32, 128, 0.05), "cornell-box-glossy": (32, 128, 0.05)
 def test_canonical_matches_direct_path_tracing(name, candidates, tmp_path):
     scene = scene_for(name, tmp_path)
     spp_di, spp_pt, bound = SAMPLES[name]
-    di = render(scene, "restir-di", spp_di, seed=3, candidates=candidates, **{"spatial.rounds": 0})
+    di = render(scene, "restir-di", spp_di, seed=3, candidates=candidates, **{"spatial.rounds": 0, "temporal": False})
     pt = render(scene, "pt", spp_pt, seed=4)
     print(name, f"candidates={candidates}")
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
@@ -80,7 +81,7 @@ def test_spatial_reuse_matches_direct_path_tracing(name, config, tmp_path):
     scene = scene_for(name, tmp_path)
     spp_di, spp_pt, bound = SAMPLES.get(name, (8, 32, 0.03))
     di = render(scene, "restir-di", spp_di, seed=5, candidates=1 if name == "half-dark" else 4,
-                **{"spatial.neighbors": k, "spatial.rounds": rounds})
+                **{"spatial.neighbors": k, "spatial.rounds": rounds, "temporal": False})
     pt = render(scene, "pt", spp_pt, seed=6)
     print(name, config)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
@@ -95,8 +96,66 @@ def test_mutations_are_detected(mutation):
     brighter) and 8.5 (A1, darker) against a threshold of 3.8: detected with probability > 0.99.
     """
     scene = half_dark_scene()
-    settings = {"candidates": 1, "spatial.neighbors": 4, "spatial.rounds": 1, "debug.mutation": mutation}
+    settings = {"candidates": 1, "spatial.neighbors": 4, "spatial.rounds": 1, "temporal": False,
+                "debug.mutation": mutation}
     di = render(scene, "restir-di", 32, seed=5, **settings)
     pt = render(scene, "pt", 128, seed=6)
     with pytest.raises(AssertionError):
         check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
+
+
+class IndependentRuns:
+    """K independent runs (fresh seed and history each) of T frames; the statistic per run is
+    its average image, so frames correlated by temporal reuse stay inside one sample
+    (TESTING.md 5.1). Exposes the attributes `check` reads."""
+
+    def __init__(self, scene, method, runs, frames, spp, size=24, seed0=100, **kw):
+        imgs = []
+        for k in range(runs):
+            cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=size, height=size,
+                                      seed=seed0 + k, max_depth=2, **kw)
+            imgs.append(restir.render(scene, cfg).image.astype(np.float64))
+        x = np.stack(imgs)
+        self.frames = runs  # `check` uses frames - 1 degrees of freedom
+        self.image = x.mean(0)
+        self.batch_variance_of_mean = x.var(0, ddof=1) / runs
+        from scipy import stats as sps
+
+        self.batch_skewness = np.nan_to_num(sps.skew(x, axis=0))
+        self.batch_excess_kurtosis = np.nan_to_num(sps.kurtosis(x, axis=0))
+
+
+TEMPORAL = {
+    "cap1": dict(cap=1.0, rounds=0),
+    "cap5": dict(cap=5.0, rounds=0),
+    "cap20": dict(cap=20.0, rounds=0),
+    "nocap": dict(cap=0.0, rounds=0),
+    "temporal+spatial": dict(cap=20.0, rounds=2),
+}
+
+
+@pytest.mark.parametrize("config", list(TEMPORAL))
+@pytest.mark.parametrize("name", ["features", "half-dark"])
+def test_temporal_reuse_matches_direct_path_tracing(name, config, tmp_path):
+    scene = scene_for(name, tmp_path)
+    t = TEMPORAL[config]
+    settings = {"candidates": 1 if name == "half-dark" else 4, "temporal": True, "temporal.cap": t["cap"],
+                "spatial.rounds": t["rounds"]}
+    di = IndependentRuns(scene, "restir-di", runs=24, frames=8, spp=1, settings=settings)
+    pt = IndependentRuns(scene, "pt", runs=24, frames=8, spp=4, seed0=500)
+    print(name, config)
+    rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
+    assert rep.mdb < 0.05
+
+
+@pytest.mark.parametrize("motion,speed", [("orbit", 3.0), ("dolly", 0.02)])
+def test_reuse_with_a_moving_camera(motion, speed, tmp_path):
+    """Temporal and spatial reuse while the camera moves: the reference path tracer renders the
+    same per-frame cameras."""
+    scene = scene_for("features", tmp_path)
+    kw = dict(camera_motion=motion, camera_speed=speed)
+    di = IndependentRuns(scene, "restir-di", runs=24, frames=8, spp=1, settings={"candidates": 4}, **kw)
+    pt = IndependentRuns(scene, "pt", runs=24, frames=8, spp=4, seed0=500, **kw)
+    print(motion)
+    rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
+    assert rep.mdb < 0.05

@@ -9,6 +9,7 @@ class DIParams:
     sample: int          # sample index within the frame (spp > 1 repeats the pipeline)
     candidates: int      # initial light candidates per pixel
     hide_emitters: int
+    temporal_cap: float  # previous confidence capped to temporal_cap * current M (<= 0: no cap)
     spatial_round: int   # index of the spatial round being run
     spatial_k: int       # configured neighbour count (enters the pairwise weights)
     spatial_radius: float  # neighbour search radius in pixels

@@ -1,4 +1,5 @@
-"""ReSTIR DI as a pipeline of stages: G-buffer, initial RIS, spatial reuse rounds, shading.
+"""ReSTIR DI as a pipeline of stages: G-buffer, initial RIS, temporal reuse, spatial reuse
+rounds, shading.
 
 render_frame is the table of contents; each stage is one kernel in its own file.
 """
@@ -11,18 +12,20 @@ from .params import DIParams
 from .reservoir import DIReservoir
 from .s1_gbuffer import gbuffer_kernel
 from .s2_initial import initial_kernel
+from .s3_temporal import temporal_kernel
 from .s4_spatial import spatial_kernel
 from .s5_shade import shade_kernel
 
 
 class ReSTIRDI(Integrator):
     name = "restir-di"
-    STAGES = ("gbuffer", "initial", "spatial", "shade")
-    KERNELS = (gbuffer_kernel, initial_kernel, spatial_kernel, shade_kernel)
-    # Literature defaults (see docs/restir_di.md): 32 light candidates; spatial reuse with 3
-    # neighbours in a 30 px radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
-    SETTINGS = {"candidates": 32, "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": 30.0,
-                "debug.mutation": "none"}
+    STAGES = ("gbuffer", "initial", "temporal", "spatial", "shade")
+    KERNELS = (gbuffer_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
+    # Literature defaults (see docs/restir_di.md): 32 light candidates; temporal reuse with the
+    # history capped at 20x the current confidence; spatial reuse with 3 neighbours in a 30 px
+    # radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
+    SETTINGS = {"candidates": 32, "temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2,
+                "spatial.neighbors": 3, "spatial.radius": 30.0, "debug.mutation": "none"}
     MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place")
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
@@ -44,6 +47,13 @@ class ReSTIRDI(Integrator):
         self.gb_bary = self.buffer("gb_bary", wp.vec2)
         self.gb_t = self.buffer("gb_t", float)
         self.gb_dir = self.buffer("gb_dir", wp.vec3)
+        # previous sample's G-buffer, camera and final reservoirs (temporal inputs)
+        self.prev_tri = self.buffer("prev_tri", wp.int32)
+        self.prev_bary = self.buffer("prev_bary", wp.vec2)
+        self.prev_t = self.buffer("prev_t", float)
+        self.prev_dir = self.buffer("prev_dir", wp.vec3)
+        self.prev_reservoirs = self.buffer("prev_reservoirs", DIReservoir)
+        self.prev_camera = None
         self.gb_weight = self.buffer("gb_weight", float)
         self.emission = self.buffer("emission", wp.vec3)
         self.reservoirs = self.buffer("reservoirs", DIReservoir)
@@ -58,6 +68,7 @@ class ReSTIRDI(Integrator):
         p.sample = sample
         p.candidates = int(self.settings["candidates"])
         p.hide_emitters = int(bool(self.settings["hide_emitters"]))
+        p.temporal_cap = float(self.settings["temporal.cap"])
         p.spatial_round = 0
         p.spatial_k = int(self.settings["spatial.neighbors"])
         p.spatial_radius = float(self.settings["spatial.radius"])
@@ -72,12 +83,19 @@ class ReSTIRDI(Integrator):
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene
-        gb = [self.gb_tri, self.gb_bary, self.gb_t, self.gb_dir]
+        camera = self.camera(frame)
         n, mean, m2 = 0, None, None
         for s in range(self.settings["spp"]):
             p = self.params(frame, s)
-            self.launch("gbuffer", gbuffer_kernel, [sc, self.dscene.camera, p], [*gb, self.gb_weight, self.emission])
+            gb = [self.gb_tri, self.gb_bary, self.gb_t, self.gb_dir]
+            prev_gb = [self.prev_tri, self.prev_bary, self.prev_t, self.prev_dir]
+            self.launch("gbuffer", gbuffer_kernel, [sc, camera, p], [*gb, self.gb_weight, self.emission])
             self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
+            if self.settings["temporal"] and self.prev_camera is not None:
+                self.launch("temporal", temporal_kernel,
+                            [sc, p, self.prev_camera, *gb, *prev_gb, self.reservoirs, self.prev_reservoirs],
+                            [self.reservoirs_back])
+                self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs
             for rd in range(self.settings["spatial.rounds"]):
                 p.spatial_round = rd
                 if self.settings["debug.mutation"] == "spatial_in_place":  # race, for the R2 test only
@@ -89,6 +107,13 @@ class ReSTIRDI(Integrator):
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs  # ping-pong
             self.launch("shade", shade_kernel, [sc, p, *gb, self.gb_weight, self.emission, self.reservoirs],
                         [self.sample_L, self.shade_rays])
+            # this sample's final reservoirs and G-buffer become the next one's history (swap)
+            self.reservoirs, self.prev_reservoirs = self.prev_reservoirs, self.reservoirs
+            self.gb_tri, self.prev_tri = self.prev_tri, self.gb_tri
+            self.gb_bary, self.prev_bary = self.prev_bary, self.gb_bary
+            self.gb_t, self.prev_t = self.prev_t, self.gb_t
+            self.gb_dir, self.prev_dir = self.prev_dir, self.gb_dir
+            self.prev_camera = camera
             self.rays += self.num_pixels + int(self.shade_rays.numpy().sum(dtype=np.int64))  # primary + shade
             L = self.sample_L.numpy().astype(np.float64)
             n += 1
