@@ -48,6 +48,24 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
     r.add_argument("--stats", help="write the stats JSON here")
     r.add_argument("--quiet", action="store_true", help="no progress bar or timing table")
+
+    v = sub.add_parser("validate", help="test a method for bias against the path tracer (independent runs, z-tests)")
+    v.add_argument("scene")
+    v.add_argument("--method", default="restir-di")
+    v.add_argument("--runs", type=int, default=32, help="independent runs K (fresh seed and history each)")
+    v.add_argument("--frames", type=int, default=8, help="frames T per run; a run's statistic is its average")
+    v.add_argument("--spp", type=int, default=1)
+    v.add_argument("--width", type=int, default=32)
+    v.add_argument("--height", type=int, default=32)
+    v.add_argument("--max-depth", type=int, help="default: the method's (restir-di: 2) or the scene's")
+    v.add_argument("--set", dest="settings", action="append", type=_key_value, default=[], metavar="KEY=VALUE")
+    v.add_argument("-D", dest="defines", action="append", type=_key_value, default=[], metavar="NAME=VALUE")
+    v.add_argument("--ref-spp", type=int, default=4, help="path-tracer spp per frame of the reference runs")
+    v.add_argument("--ref-runs", type=int, help="reference runs (default: --runs)")
+    v.add_argument("--camera-motion", default="none", choices=["none", "orbit", "dolly"])
+    v.add_argument("--camera-speed", type=float, default=1.0)
+    v.add_argument("--device", default="cpu")
+    v.add_argument("--zmap", help="write the per-pixel z map here (PNG or EXR)")
     return ap
 
 
@@ -99,11 +117,41 @@ def _render(args) -> int:
     return 0
 
 
+def _validate(args) -> int:
+    from . import api
+    from .image_io import write_image
+    from .validation import validate
+
+    scene = api.load_scene(args.scene, dict(args.defines) or None)
+    common = dict(frames=args.frames, width=args.width, height=args.height, device=args.device,
+                  camera_motion=args.camera_motion, camera_speed=args.camera_speed)
+    depth = args.max_depth
+    if depth is None and args.method == "restir-di":
+        depth = 2
+    tested = RenderConfig(method=args.method, spp=args.spp, max_depth=depth, settings=dict(args.settings), **common)
+    reference = RenderConfig(method="pt", spp=args.ref_spp, max_depth=depth, **common)
+    print(f"validating {args.method} against pt on {args.scene}: {args.runs} runs x {args.frames} frames, "
+          f"{args.width}x{args.height}", file=sys.stderr)
+    result = validate(scene, tested, args.runs, reference, args.ref_runs)
+    for channel, rep in zip("RGB", result.report.reports):
+        print(f"{channel}: {rep}")
+    print(f"minimum detectable bias (image level, 80% power): {100 * result.report.mdb:.2f}%")
+    if result.report.mdb > 0.05:
+        print("note: 'pass' only rules out biases above that; raise --runs, --frames or --spp", file=sys.stderr)
+    print(f"verdict: {result.verdict}")
+    if args.zmap:
+        write_image(args.zmap, result.zmap())
+        print(f"wrote {args.zmap}")
+    return {"pass": 0, "fail": 1, "inconclusive": 3}[result.verdict]
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         if args.command == "render":
             return _render(args)
+        if args.command == "validate":
+            return _validate(args)
     except (SceneError, ConfigError) as e:
         msg = e.message if isinstance(e, SceneError) else str(e)
         loc = f"{e.loc}: " if isinstance(e, SceneError) and e.loc else ""

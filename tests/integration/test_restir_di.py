@@ -104,25 +104,12 @@ def test_mutations_are_detected(mutation):
         check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
 
 
-class IndependentRuns:
-    """K independent runs (fresh seed and history each) of T frames; the statistic per run is
-    its average image, so frames correlated by temporal reuse stay inside one sample
-    (TESTING.md 5.1). Exposes the attributes `check` reads."""
+def independent_runs(scene, method, runs, frames, spp, size=24, seed0=100, **kw):
+    """K independent runs of T frames (restir.validation.IndependentRuns)."""
+    from restir.validation import IndependentRuns
 
-    def __init__(self, scene, method, runs, frames, spp, size=24, seed0=100, **kw):
-        imgs = []
-        for k in range(runs):
-            cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=size, height=size,
-                                      seed=seed0 + k, max_depth=2, **kw)
-            imgs.append(restir.render(scene, cfg).image.astype(np.float64))
-        x = np.stack(imgs)
-        self.frames = runs  # `check` uses frames - 1 degrees of freedom
-        self.image = x.mean(0)
-        self.batch_variance_of_mean = x.var(0, ddof=1) / runs
-        from scipy import stats as sps
-
-        self.batch_skewness = np.nan_to_num(sps.skew(x, axis=0))
-        self.batch_excess_kurtosis = np.nan_to_num(sps.kurtosis(x, axis=0))
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=size, height=size, max_depth=2, **kw)
+    return IndependentRuns(scene, cfg, runs, seed0)
 
 
 TEMPORAL = {
@@ -141,8 +128,8 @@ def test_temporal_reuse_matches_direct_path_tracing(name, config, tmp_path):
     t = TEMPORAL[config]
     settings = {"candidates": 1 if name == "half-dark" else 4, "temporal": True, "temporal.cap": t["cap"],
                 "spatial.rounds": t["rounds"]}
-    di = IndependentRuns(scene, "restir-di", runs=24, frames=8, spp=1, settings=settings)
-    pt = IndependentRuns(scene, "pt", runs=24, frames=8, spp=4, seed0=500)
+    di = independent_runs(scene, "restir-di", runs=24, frames=8, spp=1, settings=settings)
+    pt = independent_runs(scene, "pt", runs=24, frames=8, spp=4, seed0=500)
     print(name, config)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     assert rep.mdb < 0.05
@@ -154,8 +141,8 @@ def test_reuse_with_a_moving_camera(motion, speed, tmp_path):
     same per-frame cameras."""
     scene = scene_for("features", tmp_path)
     kw = dict(camera_motion=motion, camera_speed=speed)
-    di = IndependentRuns(scene, "restir-di", runs=24, frames=8, spp=1, settings={"candidates": 4}, **kw)
-    pt = IndependentRuns(scene, "pt", runs=24, frames=8, spp=4, seed0=500, **kw)
+    di = independent_runs(scene, "restir-di", runs=24, frames=8, spp=1, settings={"candidates": 4}, **kw)
+    pt = independent_runs(scene, "pt", runs=24, frames=8, spp=4, seed0=500, **kw)
     print(motion)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     assert rep.mdb < 0.05

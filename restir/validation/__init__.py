@@ -1,0 +1,7 @@
+"""The unbiasedness harness (TESTING.md 5.1-5.2): independent runs, per-pixel statistics,
+image / tile / pixel z-tests with Bonferroni splits, skew and kurtosis guards, minimum
+detectable bias. Used by `restir validate` and by the test suite."""
+from .runs import IndependentRuns, validate
+from .stats import RGBZTest, ZTestReport
+
+__all__ = ["IndependentRuns", "validate", "RGBZTest", "ZTestReport"]

@@ -1,0 +1,83 @@
+"""Independent runs of a method and their comparison with a reference method.
+
+Independence comes only from separate runs: each run has its own seed and empty history, and
+its statistic is its own average image over T frames (pixels and frames within one run are
+correlated through reuse and never treated as independent samples).
+"""
+import copy
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..api import render
+from ..config import RenderConfig
+from .stats import RGBZTest
+
+
+class IndependentRuns:
+    """K runs of `config` (seeds seed0, seed0+1, ...); per-pixel moments over runs in float64.
+
+    Exposes `image` (mean over runs), `batch_variance_of_mean` (variance of that mean),
+    `batch_skewness`, `batch_excess_kurtosis` and `frames` (= runs, for degrees of freedom),
+    the interface the z-tests read.
+    """
+
+    def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0):
+        if runs < 2:
+            from ..config import ConfigError
+
+            raise ConfigError("at least 2 independent runs are needed")
+        sums = None
+        self.stats = []
+        for k in range(runs):
+            cfg = copy.copy(config)
+            cfg.seed = seed0 + k
+            r = render(scene, cfg)
+            self.stats.append(r.stats)
+            x = r.image.astype(np.float64)
+            if sums is None:
+                sums = np.zeros((4,) + x.shape)
+            sums += (x, x ** 2, x ** 3, x ** 4)
+        s1, s2, s3, s4 = (v / runs for v in sums)
+        var = np.maximum(s2 - s1 * s1, 0.0)
+        self.frames = runs
+        self.image = s1
+        self.batch_variance_of_mean = var * runs / (runs - 1) / runs
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.batch_skewness = np.where(var > 0, (s3 - 3 * s1 * s2 + 2 * s1 ** 3) / var ** 1.5, 0.0)
+            m4 = s4 - 4 * s1 * s3 + 6 * s1 * s1 * s2 - 3 * s1 ** 4
+            self.batch_excess_kurtosis = np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
+
+
+@dataclass
+class Validation:
+    report: RGBZTest
+    tested: IndependentRuns
+    reference: IndependentRuns
+
+    @property
+    def verdict(self) -> str:
+        """"pass", "fail", or "inconclusive" (pixel statistics too skewed to judge and no failure
+        at the image or tile level)."""
+        if self.report.passed:
+            conclusive = all(r.pixel_conclusive for r in self.report.reports)
+            return "pass" if conclusive else "inconclusive"
+        return "fail"
+
+    def zmap(self) -> np.ndarray:
+        """Per-pixel z of the luminance channel as an RGB image: red above, blue below the reference."""
+        z = np.mean([r.pixel_z for r in self.report.reports], axis=0)
+        z = np.clip(np.nan_to_num(z) / 5.0, -1, 1)
+        return np.stack([np.maximum(z, 0), np.zeros_like(z), np.maximum(-z, 0)], -1).astype(np.float32)
+
+
+def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, reference_runs: int | None = None,
+             tile: int = 8, alpha: float = 1e-3) -> Validation:
+    """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2)."""
+    tested = IndependentRuns(scene, config, runs, seed0=1000)
+    ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000)
+    skew = np.maximum(np.abs(tested.batch_skewness), np.abs(ref.batch_skewness))
+    kurt = np.maximum(tested.batch_excess_kurtosis, ref.batch_excess_kurtosis)
+    rep = RGBZTest(tested.image, tested.batch_variance_of_mean, ref.image, ref.batch_variance_of_mean, tile=tile,
+                   alpha=alpha, df=runs - 1, skew=skew, kurtosis=kurt)
+    return Validation(rep, tested, ref)

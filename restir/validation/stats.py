@@ -1,0 +1,182 @@
+"""Statistical machinery of the unbiasedness harness: chi-square on the sphere, z-tests, MDB.
+
+False-failure rates: every test states its alpha. Chi-square tests use alpha = 1e-3 per test;
+z-tests split alpha = 1e-3 per configuration between image, tile and pixel levels (Bonferroni),
+as TESTING.md section 5.2 describes.
+"""
+import numpy as np
+from scipy import stats as sps
+
+Z_POWER = 0.8416  # one-sided normal quantile for 80% power
+
+
+def sphere_bins(n_theta: int, n_phi: int):
+    """Bins uniform in (cos theta, phi): equal solid angle each."""
+    return np.linspace(-1, 1, n_theta + 1), np.linspace(0, 2 * np.pi, n_phi + 1)
+
+
+def histogram_directions(dirs: np.ndarray, n_theta: int, n_phi: int) -> np.ndarray:
+    z = np.clip(dirs[:, 2], -1, 1)
+    phi = np.mod(np.arctan2(dirs[:, 1], dirs[:, 0]), 2 * np.pi)
+    zb, pb = sphere_bins(n_theta, n_phi)
+    h, _, _ = np.histogram2d(z, phi, bins=[zb, pb])
+    return h
+
+
+def integration_points(n_theta: int, n_phi: int, sub: int) -> np.ndarray:
+    """Midpoints of a sub x sub grid in every bin, as unit vectors; shape (n_theta*sub, n_phi*sub, 3)."""
+    z = np.linspace(-1, 1, n_theta * sub + 1)
+    z = 0.5 * (z[1:] + z[:-1])
+    p = np.linspace(0, 2 * np.pi, n_phi * sub + 1)
+    p = 0.5 * (p[1:] + p[:-1])
+    Z, P = np.meshgrid(z, p, indexing="ij")
+    r = np.sqrt(np.maximum(0, 1 - Z * Z))
+    return np.stack([r * np.cos(P), r * np.sin(P), Z], -1)
+
+
+def expected_counts(pdf_values: np.ndarray, n_theta: int, n_phi: int, sub: int, n: int) -> np.ndarray:
+    """pdf (solid angle) on `integration_points` -> expected counts per bin (midpoint rule)."""
+    cell = (2.0 / (n_theta * sub)) * (2 * np.pi / (n_phi * sub))
+    pv = pdf_values.reshape(n_theta, sub, n_phi, sub)
+    return pv.sum(axis=(1, 3)) * cell * n
+
+
+def chi2_test(observed: np.ndarray, expected: np.ndarray, min_expected: float = 5.0):
+    """Pearson chi-square with low-expectation bins pooled (as pbrt and Mitsuba do).
+
+    Returns (p_value, statistic, dof). The pooled bin also holds samples in bins with zero pdf,
+    so a sampler that lands where its pdf is 0 fails.
+    """
+    o = observed.ravel().astype(np.float64)
+    e = expected.ravel().astype(np.float64)
+    keep = e >= min_expected
+    obs = list(o[keep])
+    exp = list(e[keep])
+    pooled_o, pooled_e = o[~keep].sum(), e[~keep].sum()
+    if pooled_e > 0 or pooled_o > 0:
+        obs.append(pooled_o)
+        exp.append(max(pooled_e, 1e-12))
+    obs, exp = np.array(obs), np.array(exp)
+    # Totals may differ (samples outside the tabulated domain, pdf integration error):
+    # compare shapes, and test the total separately in the caller.
+    exp *= obs.sum() / exp.sum()
+    stat = float(((obs - exp) ** 2 / exp).sum())
+    dof = len(obs) - 1
+    return float(sps.chi2.sf(stat, dof)), stat, dof
+
+
+def z_threshold(alpha: float, tests: int = 1, df: int | None = None) -> float:
+    """Two-sided threshold with a Bonferroni split over `tests` (Student-t when df is given)."""
+    q = alpha / (2 * tests)
+    return float(sps.norm.isf(q) if df is None else sps.t.isf(q, df))
+
+
+def mdb(z_crit: float, std_err: float, mean: float) -> float:
+    """Minimum detectable relative bias at 80% power (TESTING.md 5.2)."""
+    return (z_crit + Z_POWER) * std_err / max(abs(mean), 1e-30)
+
+
+def skewness(x: np.ndarray) -> float:
+    return float(sps.skew(np.asarray(x).ravel()))
+
+
+def tile_means(img: np.ndarray, var: np.ndarray, tile: int):
+    """Means and variances-of-mean over tile x tile blocks of independent pixels."""
+    h, w = img.shape[:2]
+    h2, w2 = h - h % tile, w - w % tile
+    m = img[:h2, :w2].reshape(h2 // tile, tile, w2 // tile, tile, -1).mean(axis=(1, 3))
+    v = var[:h2, :w2].reshape(h2 // tile, tile, w2 // tile, tile, -1).sum(axis=(1, 3)) / tile ** 4
+    return m, v
+
+
+class ZTestReport:
+    """Image, tile and pixel z-tests of one channel of a noisy image against a reference (TESTING.md 5.2).
+
+    The family-wise false-failure rate alpha = 1e-3 is split 4e-4 (image), 3e-4 (tiles),
+    3e-4 (pixels) with Bonferroni inside each level. Pixels of a path-traced image are
+    independent, so the image and tile variances are sums of pixel variances.
+    """
+
+    def __init__(self, mean, var, ref, ref_var=0.0, tile=8, alpha=1e-3, df=None, skew=None, rel_tol=0.0,
+                 kurtosis=None, abs_tol=0.0):
+        """rel_tol, abs_tol: an equivalence margin, |deviation| below rel_tol * |ref| + abs_tol
+        counts as zero. Use it only where the reference itself is known to that precision
+        (tessellated analytic scenes, ray offsets, float32 denormals), never to absorb noise."""
+        mean = np.asarray(mean, np.float64)
+        var = np.asarray(var, np.float64)
+        ref = np.broadcast_to(np.asarray(ref, np.float64), mean.shape)
+        ref_var = np.broadcast_to(np.asarray(ref_var, np.float64), mean.shape)
+        v = var + ref_var
+        self.pixels = mean.size
+        self.image_mean = float(mean.mean())
+        self.image_ref = float(ref.mean())
+        self.image_se = float(np.sqrt(v.sum()) / mean.size)
+        self.rel_tol = rel_tol
+        self.abs_tol = abs_tol
+        self.image_z = self._z(self.image_mean - self.image_ref, self.image_ref, self.image_se)
+        tm, tv = tile_means(mean[..., None], v[..., None], tile)
+        tr, _ = tile_means(ref[..., None], v[..., None], tile)
+        self.tile_z = self._z(tm - tr, tr, np.sqrt(tv)).ravel()
+        self.pixel_z = self._z(mean - ref, ref, np.sqrt(v))
+        # Image and tile means average many independent pixels (normal); pixels use the t
+        # distribution of their variance estimate's degrees of freedom.
+        self.image_crit = z_threshold(0.4 * alpha)
+        self.tile_crit = z_threshold(0.3 * alpha, max(1, self.tile_z.size))
+        self.pixel_crit = z_threshold(0.3 * alpha, self.pixels, df)
+        self.tail_crit = 3.0 if df is None else float(sps.t.isf(sps.norm.sf(3.0), df))
+        self.tail = float(np.mean(np.abs(self.pixel_z) > self.tail_crit))
+        # Skewness guard (TESTING.md 5.2): heavy-tailed pixels make the pixel level inconclusive.
+        self.skew = 0.0 if skew is None else float(np.median(np.abs(np.asarray(skew))))
+        self.pixel_conclusive = self.skew <= 1.0
+        # The tail-fraction check assumes near-normal pixel statistics; heavy-tailed batch means
+        # (excess kurtosis well above 0) put more mass beyond 3 sigma without any bias.
+        self.kurtosis = 0.0 if kurtosis is None else float(np.median(np.asarray(kurtosis)))
+        self.tail_conclusive = self.pixel_conclusive and self.kurtosis <= 1.0
+        self.mdb = mdb(self.image_crit, self.image_se, self.image_ref)
+
+    def _z(self, dev, ref, se):
+        dev = np.sign(dev) * np.maximum(np.abs(dev) - self.rel_tol * np.abs(ref) - self.abs_tol, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(se > 0, dev / se, np.where(dev == 0, 0.0, np.inf))
+
+    @property
+    def passed(self) -> bool:
+        pixels_ok = (np.all(np.abs(self.pixel_z) < self.pixel_crit) and (self.tail <= 0.01 or not self.tail_conclusive)) \
+            or not self.pixel_conclusive
+        return abs(self.image_z) < self.image_crit and bool(np.all(np.abs(self.tile_z) < self.tile_crit)) and bool(pixels_ok)
+
+    def __str__(self) -> str:
+        return (f"image {self.image_mean:.6g} vs {self.image_ref:.6g} (z={self.image_z:+.2f}, crit {self.image_crit:.2f}, "
+                f"MDB {100 * self.mdb:.3f}%); max|z| tiles {np.abs(self.tile_z).max():.2f} (crit {self.tile_crit:.2f}), "
+                f"pixels {np.abs(self.pixel_z).max():.2f} (crit {self.pixel_crit:.2f}); tail fraction {self.tail:.4f}; "
+                f"median |skew| {self.skew:.2f}, excess kurtosis {self.kurtosis:.2f}"
+                f"{'' if self.pixel_conclusive else ' (pixel level inconclusive)'}"
+                f"{' (tail check inconclusive)' if self.pixel_conclusive and not self.tail_conclusive else ''}")
+
+
+class RGBZTest:
+    """ZTestReport per colour channel, alpha split three ways (Bonferroni).
+
+    Channels are tested separately because a path's channels are strongly correlated: the
+    variance of their average is not the average of their variances over 3.
+    """
+
+    def __init__(self, mean, var, ref, ref_var=0.0, alpha=1e-3, skew=None, kurtosis=None, **kw):
+        def ch(x, c):
+            x = np.asarray(x, np.float64)
+            return x[..., c] if x.ndim == 3 else x
+
+        self.reports = [ZTestReport(ch(mean, c), ch(var, c), ch(ref, c), ch(ref_var, c), alpha=alpha / 3,
+                                    skew=None if skew is None else ch(skew, c),
+                                    kurtosis=None if kurtosis is None else ch(kurtosis, c), **kw) for c in range(3)]
+
+    @property
+    def passed(self) -> bool:
+        return all(r.passed for r in self.reports)
+
+    @property
+    def mdb(self) -> float:
+        return max(r.mdb for r in self.reports)
+
+    def __str__(self) -> str:
+        return "\n".join(f"  {c}: {r}" for c, r in zip("RGB", self.reports))
