@@ -146,3 +146,42 @@ def test_reuse_with_a_moving_camera(motion, speed, tmp_path):
     print(motion)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     assert rep.mdb < 0.05
+
+
+def k_trend(mutation="none"):
+    """Image means (green channel) for k in {0, 1, 2, 4, 8, 16}; returns (max pairwise |z|,
+    its Bonferroni threshold over 15 pairs at alpha 1e-3, |slope / SE| of the weighted trend)."""
+    from scipy import stats as sps
+
+    scene = half_dark_scene()
+    ks = [0, 1, 2, 4, 8, 16]
+    means, ses = [], []
+    for k in ks:
+        settings = {"candidates": 1, "temporal": False, "spatial.rounds": 1 if k else 0,
+                    "spatial.neighbors": max(k, 1), "debug.mutation": mutation}
+        r = render(scene, "restir-di", 8, seed=40 + k, **settings)
+        g = r.image[..., 1].astype(np.float64)
+        means.append(g.mean())
+        ses.append(np.sqrt(r.batch_variance_of_mean[..., 1].sum()) / g.size)  # pixels are independent
+    means, ses = np.array(means), np.array(ses)
+    z = max(abs(means[i] - means[j]) / np.hypot(ses[i], ses[j]) for i in range(6) for j in range(i + 1, 6))
+    w = 1 / ses ** 2
+    x = np.array(ks, float)
+    xm = np.sum(w * x) / w.sum()
+    slope = np.sum(w * (x - xm) * means) / np.sum(w * (x - xm) ** 2)
+    trend = abs(slope) * np.sqrt(np.sum(w * (x - xm) ** 2))
+    print("means", means, "max pair z", z, "slope/SE", trend)
+    return z, sps.norm.isf(1e-3 / (2 * 15)), trend
+
+
+def test_invariance_in_k():
+    """I1 (TESTING.md 5.7): the image mean must not depend on the neighbour count, on the
+    half-dark scene where a k-dependent bias (defects A2/A3) would show."""
+    z, crit, trend = k_trend()
+    assert z < crit and trend < 3.5
+
+
+def test_invariance_in_k_catches_dropped_neighbors():
+    """Power check: the A3 mutant brightens more as k grows."""
+    z, crit, trend = k_trend("drop_empty_neighbors")
+    assert z > crit or trend > 3.5
