@@ -37,6 +37,13 @@ class RenderResult:
     samples: int            # samples per pixel in total (spp * frames)
     stats: dict
     frame_sums: np.ndarray | None = None  # (4, H, W, 3): sums of frame means^1..^4 (float64)
+    frame_images: np.ndarray | None = None  # (F, H, W, 3) when RenderConfig.keep_frames
+
+    @property
+    def batches(self) -> np.ndarray | None:
+        """Independent batch estimates of the image (the frames), when kept; frames are
+        independent only for methods without temporal reuse."""
+        return self.frame_images
 
     @property
     def frames(self) -> int:
@@ -151,6 +158,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
     h, w = integ.height, integ.width
     moments = _PixelMoments((h, w, 3))
     frame_sums = np.zeros((4, h, w, 3))
+    frames = [] if config.keep_frames else None
     spp = integ.settings["spp"]
     t0 = time.perf_counter()
     for f in range(config.frames):
@@ -158,6 +166,8 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         moments.add(mean, var, spp)
         m = mean.astype(np.float64)
         frame_sums += (m, m ** 2, m ** 3, m ** 4)
+        if frames is not None:
+            frames.append(mean.astype(np.float32))
         if progress:
             progress(f + 1, config.frames)
     total_ms = (time.perf_counter() - t0) * 1e3
@@ -184,4 +194,5 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         "triangles": scene.num_triangles,
         "tracer": integ.dscene.tracer_used,
     }
-    return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums)
+    return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums,
+                        np.stack(frames) if frames is not None else None)

@@ -29,18 +29,21 @@ class IndependentRuns:
             raise ConfigError("at least 2 independent runs are needed")
         sums = None
         self.stats = []
+        images = []
         for k in range(runs):
             cfg = copy.copy(config)
             cfg.seed = seed0 + k
             r = render(scene, cfg)
             self.stats.append(r.stats)
             x = r.image.astype(np.float64)
+            images.append(r.image)
             if sums is None:
                 sums = np.zeros((4,) + x.shape)
             sums += (x, x ** 2, x ** 3, x ** 4)
         s1, s2, s3, s4 = (v / runs for v in sums)
         var = np.maximum(s2 - s1 * s1, 0.0)
         self.frames = runs
+        self.batches = np.stack(images)  # (K, H, W, 3): one independent estimate per run
         self.image = s1
         self.batch_variance_of_mean = var * runs / (runs - 1) / runs
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -79,5 +82,6 @@ def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, re
     skew = np.maximum(np.abs(tested.batch_skewness), np.abs(ref.batch_skewness))
     kurt = np.maximum(tested.batch_excess_kurtosis, ref.batch_excess_kurtosis)
     rep = RGBZTest(tested.image, tested.batch_variance_of_mean, ref.image, ref.batch_variance_of_mean, tile=tile,
-                   alpha=alpha, df=runs - 1, skew=skew, kurtosis=kurt)
+                   alpha=alpha, df=runs - 1, skew=skew, kurtosis=kurt, batches=tested.batches,
+                   ref_batches=ref.batches)
     return Validation(rep, tested, ref)

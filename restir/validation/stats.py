@@ -98,10 +98,14 @@ class ZTestReport:
     """
 
     def __init__(self, mean, var, ref, ref_var=0.0, tile=8, alpha=1e-3, df=None, skew=None, rel_tol=0.0,
-                 kurtosis=None, abs_tol=0.0):
+                 kurtosis=None, abs_tol=0.0, batches=None, ref_batches=None):
         """rel_tol, abs_tol: an equivalence margin, |deviation| below rel_tol * |ref| + abs_tol
         counts as zero. Use it only where the reference itself is known to that precision
-        (tessellated analytic scenes, ray offsets, float32 denormals), never to absorb noise."""
+        (tessellated analytic scenes, ray offsets, float32 denormals), never to absorb noise.
+        batches, ref_batches: (B, H, W) independent estimates (runs or independent frames) of
+        each side. When given, tile and image variances are those of the batch-level tile and
+        image means, which is right when pixels are correlated (spatial and temporal reuse);
+        otherwise pixels are assumed independent and their variances are summed."""
         mean = np.asarray(mean, np.float64)
         var = np.asarray(var, np.float64)
         ref = np.broadcast_to(np.asarray(ref, np.float64), mean.shape)
@@ -111,11 +115,23 @@ class ZTestReport:
         self.image_mean = float(mean.mean())
         self.image_ref = float(ref.mean())
         self.image_se = float(np.sqrt(v.sum()) / mean.size)
+        agg_var = self._aggregate_variances(batches, tile) if batches is not None else None
+        ref_agg = self._aggregate_variances(ref_batches, tile) if ref_batches is not None else None
+        if agg_var is not None:
+            img_v, tile_v = agg_var
+            if ref_agg is not None:
+                img_v, tile_v = img_v + ref_agg[0], tile_v + ref_agg[1]
+            else:  # a noiseless or independent-pixel reference: its summed pixel variances
+                img_v = img_v + float(ref_var.sum()) / mean.size ** 2
+                tile_v = tile_v + tile_means(ref_var[..., None], ref_var[..., None], tile)[1][..., 0]
+            self.image_se = float(np.sqrt(img_v))
         self.rel_tol = rel_tol
         self.abs_tol = abs_tol
         self.image_z = self._z(self.image_mean - self.image_ref, self.image_ref, self.image_se)
         tm, tv = tile_means(mean[..., None], v[..., None], tile)
         tr, _ = tile_means(ref[..., None], v[..., None], tile)
+        if agg_var is not None:
+            tv = tile_v[..., None]
         self.tile_z = self._z(tm - tr, tr, np.sqrt(tv)).ravel()
         self.pixel_z = self._z(mean - ref, ref, np.sqrt(v))
         # Image and tile means average many independent pixels (normal); pixels use the t
@@ -133,6 +149,15 @@ class ZTestReport:
         self.kurtosis = 0.0 if kurtosis is None else float(np.median(np.asarray(kurtosis)))
         self.tail_conclusive = self.pixel_conclusive and self.kurtosis <= 1.0
         self.mdb = mdb(self.image_crit, self.image_se, self.image_ref)
+
+    @staticmethod
+    def _aggregate_variances(batches, tile):
+        """Variance of the mean over B batches of the image mean and of each tile mean."""
+        b = np.asarray(batches, np.float64)
+        n = b.shape[0]
+        h, w = b.shape[1] - b.shape[1] % tile, b.shape[2] - b.shape[2] % tile
+        tiles = b[:, :h, :w].reshape(n, h // tile, tile, w // tile, tile).mean(axis=(2, 4))
+        return float(b.mean(axis=(1, 2)).var(ddof=1) / n), tiles.var(axis=0, ddof=1) / n
 
     def _z(self, dev, ref, se):
         dev = np.sign(dev) * np.maximum(np.abs(dev) - self.rel_tol * np.abs(ref) - self.abs_tol, 0.0)
@@ -161,14 +186,18 @@ class RGBZTest:
     variance of their average is not the average of their variances over 3.
     """
 
-    def __init__(self, mean, var, ref, ref_var=0.0, alpha=1e-3, skew=None, kurtosis=None, **kw):
+    def __init__(self, mean, var, ref, ref_var=0.0, alpha=1e-3, skew=None, kurtosis=None, batches=None,
+                 ref_batches=None, **kw):
         def ch(x, c):
             x = np.asarray(x, np.float64)
             return x[..., c] if x.ndim == 3 else x
 
         self.reports = [ZTestReport(ch(mean, c), ch(var, c), ch(ref, c), ch(ref_var, c), alpha=alpha / 3,
                                     skew=None if skew is None else ch(skew, c),
-                                    kurtosis=None if kurtosis is None else ch(kurtosis, c), **kw) for c in range(3)]
+                                    kurtosis=None if kurtosis is None else ch(kurtosis, c),
+                                    batches=None if batches is None else np.asarray(batches)[..., c],
+                                    ref_batches=None if ref_batches is None else np.asarray(ref_batches)[..., c],
+                                    **kw) for c in range(3)]
 
     @property
     def passed(self) -> bool:

@@ -28,7 +28,9 @@ def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0, other=None, abs_
     if other is not None:  # the worse of the two sides decides whether pixel statistics are normal
         skew, kurt = np.maximum(skew, np.abs(other.batch_skewness)), np.maximum(kurt, other.batch_excess_kurtosis)
     rep = RGBZTest(r.image, r.batch_variance_of_mean, reference, reference_var, tile=tile,
-                   df=r.frames - 1, skew=skew, rel_tol=rel_tol, kurtosis=kurt, abs_tol=abs_tol)
+                   df=r.frames - 1, skew=skew, rel_tol=rel_tol, kurtosis=kurt, abs_tol=abs_tol,
+                   batches=getattr(r, "batches", None),
+                   ref_batches=None if other is None else getattr(other, "batches", None))
     print(rep)
     assert rep.passed, str(rep)
     return rep
