@@ -37,7 +37,6 @@ class SceneDevice:
     env_pixels: wp.array(dtype=wp.vec3)    # row-major, top row first
     env_marginal_cdf: wp.array(dtype=float)     # height+1
     env_conditional_cdf: wp.array(dtype=float)  # height * (width+1)
-    env_pdf_norm: float                    # width*height / (2 pi^2 * sum(lum*sin))
     env_select_prob: float                 # P(NEE picks the environment)
     # Textures (RGB, bilinear-free nearest lookup), packed into one array.
     tex_pixels: wp.array(dtype=wp.vec3)

@@ -35,11 +35,11 @@ def cdf_1d(weights: np.ndarray) -> np.ndarray:
     return c
 
 
-def env_tables(lum: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """Lat-long map luminance (H, W) -> marginal cdf (H+1), conditional cdfs (H*(W+1)), pdf scale."""
+def env_tables(lum: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lat-long map luminance (H, W) -> marginal cdf (H+1), conditional cdfs (H*(W+1))."""
     h, w = lum.shape
     sin_t = np.sin((np.arange(h) + 0.5) / h * np.pi)
     weight = lum * sin_t[:, None]
     cond = np.concatenate([cdf_1d(row) for row in weight])
     marginal = cdf_1d(weight.sum(1))
-    return marginal.astype(np.float32), cond.astype(np.float32), 1.0
+    return marginal.astype(np.float32), cond.astype(np.float32)

@@ -7,7 +7,6 @@ import numpy as np
 
 from . import shapes as shape_lib
 from .errors import SceneError, warn
-from .light_tables import alias_table, cdf_1d, env_tables
 from .props import Props
 from .transforms import transform_normals, transform_points
 

@@ -114,7 +114,7 @@ class DeviceScene:
         if sc.env_kind == "envmap":
             img = sc.env_image.astype(np.float32)
             h, w = img.shape[:2]
-            marginal, cond, _ = env_tables(img @ np.array([0.2126, 0.7152, 0.0722], np.float32))
+            marginal, cond = env_tables(img @ np.array([0.2126, 0.7152, 0.0722], np.float32))
             s.env_width, s.env_height = w, h
             s.env_pixels = self._arr(img.reshape(-1, 3), wp.vec3)
             s.env_marginal_cdf = self._arr(marginal, float)
@@ -124,7 +124,6 @@ class DeviceScene:
             s.env_pixels = self._arr(np.zeros((1, 3), np.float32), wp.vec3)
             s.env_marginal_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
             s.env_conditional_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
-        s.env_pdf_norm = 1.0
         has_env = sc.env_kind != "none"
         s.env_select_prob = float(1.0 if has_env and not len(lights) else (0.5 if has_env else 0.0))
 

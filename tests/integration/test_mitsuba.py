@@ -14,7 +14,6 @@ Mitsuba flushes denormal floats to zero, so deviations below 1e-6 of the image m
 import json
 import pathlib
 
-import numpy as np
 import pytest
 
 import restir

@@ -10,7 +10,7 @@ import pytest
 
 import restir
 from restir.scene.builtin import sphere_cap_radiance
-from tests.stats import RGBZTest
+from restir.validation.stats import RGBZTest
 
 
 FRAMES = 32

@@ -13,7 +13,7 @@ from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
                                  MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
                                  MICROFACET_GGX)
-from tests.stats import chi2_test, expected_counts, histogram_directions, integration_points
+from restir.validation.stats import chi2_test, expected_counts, histogram_directions, integration_points
 
 ALPHA = 1e-3
 N = 1_000_000

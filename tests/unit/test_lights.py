@@ -13,7 +13,7 @@ from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.scene_device import SceneDevice
 from restir.image_io import write_exr
 from tests.scenes import device_scene, sensor, triangle
-from tests.stats import chi2_test, expected_counts, histogram_directions, integration_points
+from restir.validation.stats import chi2_test, expected_counts, histogram_directions, integration_points
 
 ALPHA = 1e-3
 N = 1_000_000

@@ -8,10 +8,10 @@ import warp as wp
 from scipy import stats as sps
 
 from restir.device.rng import rng_key, rng_uniform
-from restir.resampling.mis import (MAX_TECHNIQUES, balance_weight, constant_binary_weight, constant_weight_biased,
+from restir.resampling.mis import (balance_weight, constant_binary_weight, constant_weight_biased,
                                    pairwise_canonical_term, pairwise_neighbor_weight, techniques_vec)
-from restir.resampling.ris import RisState, cap_confidence, ris_contribution_weight, ris_init, ris_stream
-from tests.stats import chi2_test
+from restir.resampling.ris import cap_confidence, ris_contribution_weight, ris_init, ris_stream
+from restir.validation.stats import chi2_test
 
 MIS_PAIRWISE, MIS_BALANCE, MIS_CONSTANT_BINARY, MIS_CONSTANT_BIASED = 0, 1, 2, 3
 

@@ -11,7 +11,7 @@ from restir.device import microfacet as mf
 from restir.device import sampling as sp
 from restir.device.rng import rng_key, rng_uniform
 from restir.scene.light_tables import alias_table
-from tests.stats import chi2_test
+from restir.validation.stats import chi2_test
 
 ALPHA = 1e-3
 
