@@ -1,7 +1,7 @@
 """ReSTIR DI against the direct-only path tracer (`--method pt --max-depth 2`), per pixel.
 
 Both sides noisy: Welch z per channel over 32 frames (batch means), alpha = 1e-3 per
-configuration, image/tile/pixel levels as tests/stats.py; the MDB is asserted small.
+configuration, image/tile/pixel levels as restir/validation/stats.py; the MDB is asserted small.
 This commit covers the canonical (initial RIS) stage; reuse stages add their configurations.
 """
 import numpy as np
