@@ -193,6 +193,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         "scene_bytes": integ.dscene.memory_bytes(),
         "triangles": scene.num_triangles,
         "tracer": integ.dscene.tracer_used,
+        "counters": dict(integ.counters),
     }
     return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums,
                         np.stack(frames) if frames is not None else None)

@@ -25,6 +25,7 @@ class Integrator:
         self.width, self.height = cam.width, cam.height
         self.num_pixels = self.width * self.height
         self.rays = 0
+        self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.allocate()
         for k in self.KERNELS:
             wp.load_module(k.module, device=self.device)
@@ -44,6 +45,9 @@ class Integrator:
         a = wp.zeros(shape or self.num_pixels, dtype=dtype, device=self.device)
         self.buffers.add(name, a)
         return a
+
+    def count(self, name: str, per_pixel) -> None:
+        self.counters[name] = self.counters.get(name, 0) + int(per_pixel.numpy().sum(dtype=np.int64))
 
     def allocate(self) -> None:
         raise NotImplementedError

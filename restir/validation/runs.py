@@ -35,6 +35,9 @@ class IndependentRuns:
             cfg.seed = seed0 + k
             r = render(scene, cfg)
             self.stats.append(r.stats)
+            for name, n in r.stats.get("counters", {}).items():
+                if name.startswith("nonfinite") and n:
+                    raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable (TESTING.md 5.1)")
             x = r.image.astype(np.float64)
             images.append(r.image)
             if sums is None:

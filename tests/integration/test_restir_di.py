@@ -29,6 +29,7 @@ def render(scene, method, spp, seed, size=24, **settings):
     r = restir.render(scene, cfg)
     if method == "restir-di" and "debug.mutation" not in settings:
         assert r.stats["settings"]["debug.mutation"] == "none"  # the unbiased build, asserted
+    assert not any(n for name, n in r.stats["counters"].items() if name.startswith("nonfinite")), r.stats["counters"]
     return r
 
 
@@ -209,3 +210,33 @@ def test_default_restir_di_on_shared_scenes(name):
     print(name)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=8)
     assert rep.mdb < 0.06
+
+
+def test_every_frame_is_unbiased(tmp_path):
+    """L1 (TESTING.md 5.8): frame t alone (not an average) is unbiased, for t in
+    {0, 1, 2, 4, 8, 15}: 48 independent runs, Bonferroni over the 6 frames (alpha 1e-3 in all).
+    Frame 0 also checks initialisation (no stale history); later frames catch drift."""
+    from restir.validation import IndependentRuns
+    from restir.validation.stats import RGBZTest
+
+    scene = scene_for("features", tmp_path)
+    runs, frames_t = 48, [0, 1, 2, 4, 8, 15]
+    imgs = []
+    for k in range(runs):
+        cfg = restir.RenderConfig(method="restir-di", spp=1, frames=16, width=16, height=16, seed=2000 + k,
+                                  max_depth=2, keep_frames=True, settings={"candidates": 4})
+        imgs.append(restir.render(scene, cfg).frame_images)
+    imgs = np.stack(imgs).astype(np.float64)  # (runs, frames, H, W, 3)
+    ref = IndependentRuns(scene, restir.RenderConfig(method="pt", spp=16, frames=4, width=16, height=16, max_depth=2),
+                          24, seed0=9000)
+    from scipy import stats as sps
+
+    for t in frames_t:
+        x = imgs[:, t]
+        skew = np.maximum(np.abs(np.nan_to_num(sps.skew(x, axis=0))), np.abs(ref.batch_skewness))
+        kurt = np.maximum(np.nan_to_num(sps.kurtosis(x, axis=0)), ref.batch_excess_kurtosis)
+        rep = RGBZTest(x.mean(0), x.var(0, ddof=1) / runs, ref.image, ref.batch_variance_of_mean, tile=4,
+                       alpha=1e-3 / len(frames_t), df=runs - 1, batches=x, ref_batches=ref.batches,
+                       skew=skew, kurtosis=kurt)
+        print("frame", t, f"MDB {100 * rep.mdb:.2f}%")
+        assert rep.passed, f"frame {t}:\n{rep}"

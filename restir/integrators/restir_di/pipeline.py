@@ -60,6 +60,7 @@ class ReSTIRDI(Integrator):
         self.reservoirs_back = self.buffer("reservoirs_back", DIReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
         self.shade_rays = self.buffer("shade_rays", wp.int32)
+        self.nonfinite = self.buffer("nonfinite", wp.int32)  # per-stage scratch, summed into counters
 
     def params(self, frame: int, sample: int) -> DIParams:
         p = DIParams()
@@ -90,23 +91,27 @@ class ReSTIRDI(Integrator):
             gb = [self.gb_tri, self.gb_bary, self.gb_t, self.gb_dir]
             prev_gb = [self.prev_tri, self.prev_bary, self.prev_t, self.prev_dir]
             self.launch("gbuffer", gbuffer_kernel, [sc, camera, p], [*gb, self.gb_weight, self.emission])
-            self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
+            self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs, self.nonfinite])
+            self.count("nonfinite_weights", self.nonfinite)
             if self.settings["temporal"] and self.prev_camera is not None:
                 self.launch("temporal", temporal_kernel,
                             [sc, p, self.prev_camera, *gb, *prev_gb, self.reservoirs, self.prev_reservoirs],
-                            [self.reservoirs_back])
+                            [self.reservoirs_back, self.nonfinite])
+                self.count("nonfinite_weights", self.nonfinite)
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs
             for rd in range(self.settings["spatial.rounds"]):
                 p.spatial_round = rd
                 if self.settings["debug.mutation"] == "spatial_in_place":  # race, for the R2 test only
                     self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
-                                [self.reservoirs])
+                                [self.reservoirs, self.nonfinite])
                     continue
                 self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
-                            [self.reservoirs_back])
+                            [self.reservoirs_back, self.nonfinite])
+                self.count("nonfinite_weights", self.nonfinite)
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs  # ping-pong
             self.launch("shade", shade_kernel, [sc, p, *gb, self.gb_weight, self.emission, self.reservoirs],
-                        [self.sample_L, self.shade_rays])
+                        [self.sample_L, self.shade_rays, self.nonfinite])
+            self.count("nonfinite_outputs", self.nonfinite)
             # this sample's final reservoirs and G-buffer become the next one's history (swap)
             self.reservoirs, self.prev_reservoirs = self.prev_reservoirs, self.reservoirs
             self.gb_tri, self.prev_tri = self.prev_tri, self.gb_tri

@@ -4,7 +4,7 @@ Candidates y_j come from the NEE light sampler (power-proportional triangles uni
 or the environment), with density p(y_j) in the sample's measure; the target is
 p_hat(y) = luminance(f_s Le G) without visibility. Weights w_j = p_hat(y_j) / (N p(y_j)),
 W = w_sum / p_hat(y), M = 1. Delta-only surfaces and misses keep an empty reservoir.
-Reads: scene, G-buffer. Writes: reservoirs.
+Reads: scene, G-buffer. Writes: reservoirs, nonfinite (count of NaN/inf weights, per pixel).
 """
 import warp as wp
 
@@ -23,9 +23,10 @@ from .reservoir import DIReservoir, empty_reservoir, luminance, unshadowed_contr
 @wp.kernel
 def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
                    gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
-                   reservoirs: wp.array(dtype=DIReservoir)):
+                   reservoirs: wp.array(dtype=DIReservoir), nonfinite: wp.array(dtype=wp.int32)):
     pixel = wp.tid() + offset
     out = empty_reservoir()
+    bad = int(0)
     tri = gb_tri[pixel]
     if tri >= 0:
         b = gb_bary[pixel]
@@ -62,9 +63,11 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp
                 s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(3)))
                 if s.selected == j:
                     out = cand
+            bad = s.nonfinite
             out.W = ris_contribution_weight(s, 1.0)
             out.M = 1.0
             if out.W <= 0.0:
                 out = empty_reservoir()
                 out.M = 1.0
     reservoirs[pixel] = out
+    nonfinite[pixel] = bad

@@ -7,7 +7,7 @@ decision on G-buffers only). The previous confidence is capped to temporal_cap x
 one before any weight is computed (the one cap, restir/resampling/ris.py). Light samples move
 unchanged (J = 1). Static scenes: the previous domain is evaluated with the current geometry.
 Reads: scene, G-buffer, previous G-buffer and camera, reservoirs (initial), previous final
-reservoirs. Writes: reservoirs_out.
+reservoirs. Writes: reservoirs_out, nonfinite.
 """
 import warp as wp
 
@@ -28,10 +28,11 @@ def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_came
                     gb_dir: wp.array(dtype=wp.vec3), prev_tri: wp.array(dtype=wp.int32),
                     prev_bary: wp.array(dtype=wp.vec2), prev_t: wp.array(dtype=float), prev_dir: wp.array(dtype=wp.vec3),
                     reservoirs: wp.array(dtype=DIReservoir), prev_reservoirs: wp.array(dtype=DIReservoir),
-                    reservoirs_out: wp.array(dtype=DIReservoir)):
+                    reservoirs_out: wp.array(dtype=DIReservoir), nonfinite: wp.array(dtype=wp.int32)):
     pixel = wp.tid() + offset
     c = reservoirs[pixel]
     reservoirs_out[pixel] = c
+    nonfinite[pixel] = 0
     sc = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
     if sc.valid == 0:
         return
@@ -71,3 +72,4 @@ def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_came
     if s.selected < 0:
         out.light_tri = -2
     reservoirs_out[pixel] = out
+    nonfinite[pixel] = s.nonfinite

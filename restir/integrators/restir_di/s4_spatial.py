@@ -7,7 +7,8 @@ neighbours stay in the technique set with weight 0). Light samples move between 
 unchanged (area / solid-angle measure: J = 1); both own-domain targets are re-evaluated from the
 G-buffers. Targets and MIS densities are unshadowed, so every technique covers the same support;
 visibility enters at shading.
-Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong).
+Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong),
+nonfinite.
 """
 import warp as wp
 
@@ -26,9 +27,10 @@ from .reservoir import DIReservoir, luminance, unshadowed_contribution
 def spatial_kernel(offset: int, scene: SceneDevice, params: DIParams, width: int, height: int,
                    gb_tri: wp.array(dtype=wp.int32), gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float),
                    gb_dir: wp.array(dtype=wp.vec3), reservoirs_in: wp.array(dtype=DIReservoir),
-                   reservoirs_out: wp.array(dtype=DIReservoir)):
+                   reservoirs_out: wp.array(dtype=DIReservoir), nonfinite: wp.array(dtype=wp.int32)):
     pixel = wp.tid() + offset
     c = reservoirs_in[pixel]
+    nonfinite[pixel] = 0
     sc = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
     if sc.valid == 0:
         reservoirs_out[pixel] = c
@@ -78,3 +80,4 @@ def spatial_kernel(offset: int, scene: SceneDevice, params: DIParams, width: int
     if s.selected < 0:  # nothing could be selected: an empty reservoir that still carries M
         out.light_tri = -2
     reservoirs_out[pixel] = out
+    nonfinite[pixel] = s.nonfinite

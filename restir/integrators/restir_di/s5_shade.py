@@ -3,7 +3,8 @@
 L = emission + f_s Le G V(y) W  (the resampled smooth part; V traced here)
       + the delta lobes' direct light, by BSDF sampling (kept only when a delta lobe is chosen;
         the smooth lobes are the resampled part's), all times the filter weight.
-Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, shade_rays.
+Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, shade_rays, nonfinite (NaN/inf outputs,
+counted and kept: never silently zeroed).
 """
 import warp as wp
 
@@ -23,7 +24,7 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
                  gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
                  gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
                  reservoirs: wp.array(dtype=DIReservoir), sample_L: wp.array(dtype=wp.vec3),
-                 shade_rays: wp.array(dtype=wp.int32)):
+                 shade_rays: wp.array(dtype=wp.int32), nonfinite: wp.array(dtype=wp.int32)):
     pixel = wp.tid() + offset
     L = emission[pixel]
     rays = int(0)
@@ -59,3 +60,4 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
             L += wp.cw_mul(bs.weight, Le) * weight
     sample_L[pixel] = L
     shade_rays[pixel] = rays
+    nonfinite[pixel] = wp.where(L[0] == L[0] and L[1] == L[1] and L[2] == L[2] and wp.abs(L[0] + L[1] + L[2]) < 3.0e38, 0, 1)
