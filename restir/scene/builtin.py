@@ -173,11 +173,39 @@ def sphere_cap_radiance(albedo: float, radiance: float, phi: float, max_depth: i
     return albedo * phi * radiance * sum(albedo ** j for j in range(n))
 
 
+def many_lights(width=256, height=256, spp=16, max_depth=-1, count=400, seed=7) -> dict:
+    """The Cornell room without its light and blocks' colours, lit by `count` small emissive
+    triangles of random colour and power scattered over the ceiling and upper walls (for
+    ReSTIR DI's many-light benchmark). Deterministic for a seed."""
+    scene = cornell_box(width=width, height=height, spp=spp, max_depth=max_depth)
+    del scene["light"]
+    rng = np.random.default_rng(seed)
+    for i in range(count):
+        wall = rng.integers(0, 3)  # ceiling, left wall, right wall
+        c = rng.uniform([0.05, 0.05], [0.5, 0.5])
+        size = rng.uniform(0.004, 0.012)
+        if wall == 0:
+            p = np.array([c[0] + 0.03, 0.5483, c[1] + 0.03])
+            tri = [p, p + [size, 0, 0], p + [0, 0, size]]
+        elif wall == 1:
+            p = np.array([0.5525, 0.30 + c[0] * 0.5, c[1] + 0.03])
+            tri = [p, p + [0, 0, size], p + [0, size, 0]]
+        else:
+            p = np.array([0.0005, 0.30 + c[0] * 0.5, c[1] + 0.03])
+            tri = [p, p + [0, size, 0], p + [0, 0, size]]
+        color = rng.uniform(0.2, 1.0, 3) * rng.uniform(50, 400)
+        scene[f"light{i}"] = {"type": "trimesh", "vertices": np.array(tri), "faces": np.array([[0, 1, 2]]),
+                              "bsdf": _diffuse([0, 0, 0]),
+                              "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(color)}}}
+    return scene
+
+
 BUILTINS = {
     "cornell-box": cornell_box,
     "cornell-box-glossy": lambda **kw: cornell_box(glossy=True, **kw),
     "furnace": furnace,
     "sphere-cap": sphere_cap,
+    "many-lights": many_lights,
 }
 
 
