@@ -28,9 +28,12 @@ def main():
     ap.add_argument("--height", type=int, default=128)
     ap.add_argument("--frames", type=int, default=16)
     ap.add_argument("--ref-spp", type=int, default=2048)
+    ap.add_argument("--hide-emitters", action="store_true",
+                    help="measure lighting only: directly visible emitters are black for every method")
     ap.add_argument("--json")
     args = ap.parse_args()
     scene = restir.load_scene(args.scene, width=args.width, height=args.height)
+    scene.hide_emitters = args.hide_emitters
     common = dict(width=args.width, height=args.height, max_depth=2, keep_frames=True)
 
     ref = restir.render(scene, restir.RenderConfig(spp=args.ref_spp, seed=99, **common)).image.astype(np.float64)
