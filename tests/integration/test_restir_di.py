@@ -240,3 +240,57 @@ def test_every_frame_is_unbiased(tmp_path):
                        skew=skew, kurtosis=kurt)
         print("frame", t, f"MDB {100 * rep.mdb:.2f}%")
         assert rep.passed, f"frame {t}:\n{rep}"
+
+
+def long_run_trend(seeds, frames, batch, size=16, mutation="none"):
+    """Per-batch image means (averaged over seeds) and per-batch maxima over a long run of
+    default ReSTIR DI on the feature scene (temporal and spatial reuse feeding each other)."""
+    import tempfile
+
+    scene = scene_for("features", __import__("pathlib").Path(tempfile.mkdtemp()))
+    means, peaks = [], []
+    for s in range(seeds):
+        cfg = restir.RenderConfig(method="restir-di", spp=1, frames=frames, width=size, height=size, seed=7000 + s,
+                                  max_depth=2, keep_frames=True,
+                                  settings={"candidates": 4, "spatial.neighbors": 8, "debug.mutation": mutation})
+        f = restir.render(scene, cfg).frame_images.astype(np.float64).mean(-1)  # (frames, H, W)
+        b = f[: frames - frames % batch].reshape(-1, batch, size, size)
+        means.append(b.mean(axis=(1, 2, 3)))
+        peaks.append(b.max(axis=(1, 2, 3)))
+    return np.array(means), np.array(peaks)  # (seeds, batches)
+
+
+def check_no_trend(means, peaks):
+    from scipy import stats as sps
+
+    per_batch = means.mean(0)
+    se = means.std(0, ddof=1) / np.sqrt(means.shape[0])
+    x = np.arange(len(per_batch), dtype=float)
+    w = 1 / se ** 2
+    xm = np.sum(w * x) / w.sum()
+    slope = np.sum(w * (x - xm) * per_batch) / np.sum(w * (x - xm) ** 2)
+    t = slope * np.sqrt(np.sum(w * (x - xm) ** 2))
+    rho, p = sps.spearmanr(x, peaks.max(0))
+    print(f"batch means {np.round(per_batch, 4)}; slope/SE {t:.2f}; peak Spearman rho {rho:.2f} (p {p:.3f})")
+    assert abs(t) < 3.5, "the image brightens or darkens over frames (temporal feedback)"
+    assert not (rho > 0 and p < 1e-3), "the brightest pixels grow over frames (runaway spots)"
+
+
+def test_no_drift_over_many_frames():
+    """L2 (TESTING.md 5.8), fast version: 8 seeds x 600 frames, 8 neighbours, batches of 50
+    frames. A runaway temporal feedback loop (symptom b of the seed report) shows as a trend in
+    the batch means or as growing maxima."""
+    check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50))
+
+
+@pytest.mark.slow
+def test_no_drift_over_many_frames_slow():
+    """L2 as TESTING.md specifies it: 16 seeds x 5000 frames, batches of 100."""
+    check_no_trend(*long_run_trend(seeds=16, frames=5000, batch=100))
+
+
+def test_drift_test_catches_a_feedback_loop():
+    """Power check: over-weighting the history by 1.5 per frame feeds back through temporal and
+    spatial reuse (TESTING.md 3.3: runaway needs a gain above about 1.5); L2 must flag it."""
+    with pytest.raises(AssertionError):
+        check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50, mutation="temporal_overweight"))

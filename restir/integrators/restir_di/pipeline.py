@@ -26,7 +26,7 @@ class ReSTIRDI(Integrator):
     # radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
     SETTINGS = {"candidates": 32, "temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2,
                 "spatial.neighbors": 3, "spatial.radius": 30.0, "debug.mutation": "none"}
-    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place")
+    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place", "temporal_overweight")
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
     @staticmethod
@@ -76,6 +76,7 @@ class ReSTIRDI(Integrator):
         mutation = self.settings["debug.mutation"]
         p.mut_drop_empty = int(mutation == "drop_empty_neighbors")
         p.mut_skip_zero_canonical = int(mutation == "skip_zero_canonical")
+        p.mut_temporal_overweight = int(mutation == "temporal_overweight")
         return p
 
     def launch(self, stage: str, kernel, inputs: list, outputs: list) -> None:

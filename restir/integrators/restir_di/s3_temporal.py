@@ -63,7 +63,10 @@ def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_came
     p_c_at_q = luminance(unshadowed_contribution(scene, sc.hit, sc.frame, sc.wi, sc.mat, r))
     d[0] = p_c_at_q * c.M
     d[1] = luminance(unshadowed_contribution(scene, sq.hit, sq.frame, sq.wi, sq.mat, r)) * Mq
-    s = ris_stream(s, balance_weight(d, 2, 1) * p_c_at_q * r.W, p_c_at_q, Mq, 1, rng_uniform(key, base + wp.uint32(1)))
+    w_prev = balance_weight(d, 2, 1) * p_c_at_q * r.W
+    if params.mut_temporal_overweight != 0:
+        w_prev = w_prev * 1.5
+    s = ris_stream(s, w_prev, p_c_at_q, Mq, 1, rng_uniform(key, base + wp.uint32(1)))
     out = c
     if s.selected == 1:
         out = r
