@@ -61,13 +61,11 @@ def ris_stream(s: RisState, w: float, p_hat: float, M: float, index: int, u: flo
 
 @wp.func
 def ris_contribution_weight(s: RisState, normalization: float) -> float:
-    """W = w_sum / (p_hat(y) * normalization); 0 when nothing was selected."""
+    """W = w_sum / (p_hat(y) * normalization); 0 when nothing was selected. A non-finite W is
+    returned as it is (never silently zeroed): it surfaces in the stages' non-finite counters."""
     if s.selected < 0 or s.p_hat <= 0.0 or normalization <= 0.0:
         return 0.0
-    W = s.w_sum / (s.p_hat * normalization)
-    if not is_finite(W):
-        return 0.0
-    return W
+    return s.w_sum / (s.p_hat * normalization)
 
 
 @wp.func

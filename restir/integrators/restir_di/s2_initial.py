@@ -9,13 +9,12 @@ Reads: scene, G-buffer. Writes: reservoirs, nonfinite (count of NaN/inf weights,
 import warp as wp
 
 from ...device.bsdf import bsdf_is_delta_only
-from ...device.intersect import surface_at
 from ...device.lights import sample_light
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
-from ...device.sampling import frame_from_normal, to_local
-from ...device.scene_device import SceneDevice, material_at
+from ...device.scene_device import SceneDevice
 from ...device.types import DIMS_PER_SAMPLE, STAGE_DI_INITIAL
 from ...resampling.ris import ris_contribution_weight, ris_init, ris_stream
+from .gbuffer import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, empty_reservoir, luminance, unshadowed_contribution
 
@@ -27,14 +26,13 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp
     pixel = wp.tid() + offset
     out = empty_reservoir()
     bad = int(0)
-    tri = gb_tri[pixel]
-    if tri >= 0:
-        b = gb_bary[pixel]
-        hit = surface_at(scene, tri, b[0], b[1], gb_t[pixel])
-        mat = material_at(scene, tri, hit.uv)
+    sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+    if sh.valid != 0:
+        hit = sh.hit
+        mat = sh.mat
+        frame = sh.frame
+        wi = sh.wi
         if bsdf_is_delta_only(mat) == 0:
-            frame = frame_from_normal(hit.ns)
-            wi = to_local(frame, -gb_dir[pixel])
             key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
             base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
             s = ris_init()

@@ -9,12 +9,13 @@ counted and kept: never silently zeroed).
 import warp as wp
 
 from ...device.bsdf import bsdf_sample
-from ...device.intersect import T_MAX, offset_origin, surface_at, trace_closest
+from ...device.intersect import T_MAX, offset_origin, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
-from ...device.sampling import frame_from_normal, to_local, to_world
-from ...device.scene_device import SceneDevice, material_at
+from ...device.sampling import to_world
+from ...device.scene_device import SceneDevice
 from ...device.types import DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_SHADE
+from .gbuffer import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, light_visible, unshadowed_contribution
 
@@ -28,13 +29,12 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
     pixel = wp.tid() + offset
     L = emission[pixel]
     rays = int(0)
-    tri = gb_tri[pixel]
-    if tri >= 0:
-        b = gb_bary[pixel]
-        hit = surface_at(scene, tri, b[0], b[1], gb_t[pixel])
-        mat = material_at(scene, tri, hit.uv)
-        frame = frame_from_normal(hit.ns)
-        wi = to_local(frame, -gb_dir[pixel])
+    sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+    if sh.valid != 0:
+        hit = sh.hit
+        mat = sh.mat
+        frame = sh.frame
+        wi = sh.wi
         weight = gb_weight[pixel]
         # ---- resampled smooth part
         r = reservoirs[pixel]
