@@ -130,7 +130,9 @@ def make_integrator(scene: Scene, config: RenderConfig):
         dscene = DeviceScene(scene, config.device, config.tracer)
     except RuntimeError as e:
         raise ConfigError(str(e)) from None
-    return cls(dscene, settings, config.device, config.slices)
+    integ = cls(dscene, settings, config.device, config.slices)
+    integ.reverse_launch = config.debug_reverse_launch
+    return integ
 
 
 def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> RenderResult:

@@ -22,6 +22,7 @@ class RenderConfig:
     device: str = "cpu"
     settings: dict = field(default_factory=dict)   # method settings (see each method's SETTINGS)
     slices: int | None = None       # CPU launch slices (None: one per core)
+    debug_reverse_launch: bool = False  # run CPU slices sequentially, last first (race test R2)
     tracer: str = "auto"            # "auto" (Embree on the CPU if available), "embree", "warp"
     keep_frames: bool = False       # keep every frame's image (RenderResult.frame_images), for statistics
     camera_motion: str = "none"     # "none", "orbit" (speed: degrees/frame), "dolly" (speed: scene sizes/frame)

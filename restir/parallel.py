@@ -34,10 +34,22 @@ def _executor(n: int) -> ThreadPoolExecutor:
     return _pool
 
 
-def launch_pixels(kernel, count: int, inputs: list, outputs: list, device, slices: int | None = None) -> None:
-    """Launch `kernel(offset, *inputs, *outputs)` over `count` items, split over CPU cores."""
+def launch_pixels(kernel, count: int, inputs: list, outputs: list, device, slices: int | None = None,
+                  reverse: bool = False) -> None:
+    """Launch `kernel(offset, *inputs, *outputs)` over `count` items, split over CPU cores.
+
+    reverse (a debug permutation, TESTING.md R2): run the slices one after another, last first,
+    so that items are processed in a different order than any forward launch; a correct pass gives
+    bitwise the same result, a pass that reads its own outputs does not.
+    """
     device = wp.get_device(device)
     if count <= 0:
+        return
+    if reverse and device.is_cpu:
+        n = min(slices or default_slices(), count)
+        bounds = [count * i // n for i in range(n + 1)]
+        for i in reversed(range(n)):
+            wp.launch(kernel, dim=bounds[i + 1] - bounds[i], inputs=[bounds[i], *inputs], outputs=outputs, device=device)
         return
     if device.is_cuda:
         wp.launch(kernel, dim=count, inputs=[0, *inputs], outputs=outputs, device=device)

@@ -25,6 +25,7 @@ class Integrator:
         self.width, self.height = cam.width, cam.height
         self.num_pixels = self.width * self.height
         self.rays = 0
+        self.reverse_launch = False  # debug: slices in reverse order (see parallel.launch_pixels)
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.allocate()
         for k in self.KERNELS:

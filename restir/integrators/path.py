@@ -209,7 +209,8 @@ class PathTracer(Integrator):
         with self.timer.stage("path_trace"):
             launch_pixels(path_trace_kernel, self.num_pixels,
                           inputs=[self.dscene.scene, self.camera(frame), self.params(frame)],
-                          outputs=[self.frame_mean, self.frame_var, self.frame_rays], device=self.device, slices=self.slices)
+                          outputs=[self.frame_mean, self.frame_var, self.frame_rays], device=self.device, slices=self.slices,
+                          reverse=self.reverse_launch)
         self.rays += int(self.frame_rays.numpy().sum(dtype=np.int64))
         shape = (self.height, self.width, 3)
         return self.frame_mean.numpy().reshape(shape), self.frame_var.numpy().reshape(shape)

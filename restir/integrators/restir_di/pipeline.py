@@ -81,7 +81,7 @@ class ReSTIRDI(Integrator):
 
     def launch(self, stage: str, kernel, inputs: list, outputs: list) -> None:
         with self.timer.stage(stage):
-            launch_pixels(kernel, self.num_pixels, inputs, outputs, self.device, self.slices)
+            launch_pixels(kernel, self.num_pixels, inputs, outputs, self.device, self.slices, self.reverse_launch)
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene
