@@ -10,11 +10,12 @@ in its measure (J = 1). The integrand at a primary hit x (smooth BSDF lobes only
 """
 import warp as wp
 
-from ...device.bsdf import Material, bsdf_eval
+from ...device.bsdf import bsdf_eval
 from ...device.intersect import SurfaceHit, T_MAX, is_visible, offset_origin
 from ...device.lights import env_eval, triangle_emission
-from ...device.sampling import Frame, to_local
+from ...device.sampling import to_local
 from ...device.scene_device import SceneDevice
+from .gbuffer import Shading
 
 
 @wp.struct
@@ -55,12 +56,11 @@ def direction_to_light(r: DIReservoir, x: wp.vec3) -> wp.vec4:
 
 
 @wp.func
-def unshadowed_contribution(scene: SceneDevice, hit: SurfaceHit, frame: Frame, wi: wp.vec3, mat: Material,
-                            r: DIReservoir) -> wp.vec3:
-    """f_s * Le * G at the primary hit (no visibility); 0 for no sample."""
+def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> wp.vec3:
+    """f_s * Le * G at the primary hit sh (no visibility); 0 for no sample."""
     if r.light_tri == -2:
         return wp.vec3(0.0)
-    dd = direction_to_light(r, hit.p)
+    dd = direction_to_light(r, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])
     if dd[3] <= 0.0:
         return wp.vec3(0.0)
@@ -71,7 +71,7 @@ def unshadowed_contribution(scene: SceneDevice, hit: SurfaceHit, frame: Frame, w
     else:
         Le = triangle_emission(scene, r.light_tri, r.light_ns, -d)
         G = wp.abs(wp.dot(r.light_n, d)) / (dd[3] * dd[3])
-    f = bsdf_eval(mat, wi, to_local(frame, d))
+    f = bsdf_eval(sh.mat, sh.wi, to_local(sh.frame, d))
     return wp.cw_mul(f, Le) * G
 
 

@@ -28,17 +28,13 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp
     bad = int(0)
     sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
     if sh.valid != 0:
-        hit = sh.hit
-        mat = sh.mat
-        frame = sh.frame
-        wi = sh.wi
-        if bsdf_is_delta_only(mat) == 0:
+        if bsdf_is_delta_only(sh.mat) == 0:
             key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
             base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
             s = ris_init()
             for j in range(params.candidates):
                 dim = base + wp.uint32(4 * j)
-                ls = sample_light(scene, hit.p, rng_uniform(key, dim), rng_uniform2(key, dim + wp.uint32(1)))
+                ls = sample_light(scene, sh.hit.p, rng_uniform(key, dim), rng_uniform2(key, dim + wp.uint32(1)))
                 cand = empty_reservoir()
                 p_source = float(0.0)
                 if ls.pdf > 0.0:
@@ -56,7 +52,7 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp
                 w = float(0.0)
                 p_hat = float(0.0)
                 if p_source > 0.0:
-                    p_hat = luminance(unshadowed_contribution(scene, hit, frame, wi, mat, cand))
+                    p_hat = luminance(unshadowed_contribution(scene, sh, cand))
                     w = p_hat / (float(params.candidates) * p_source)
                 s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(3)))
                 if s.selected == j:

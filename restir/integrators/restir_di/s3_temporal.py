@@ -46,7 +46,7 @@ def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_came
     sq = load_shading(scene, prev_tri, prev_bary, prev_t, prev_dir, q)
     if sq.valid == 0 or not similar_surfaces(sc, sq):
         return
-    p_c = luminance(unshadowed_contribution(scene, sc.hit, sc.frame, sc.wi, sc.mat, c))
+    p_c = luminance(unshadowed_contribution(scene, sc, c))
     if params.mut_skip_zero_canonical != 0 and p_c * c.W == 0.0:
         return
     r = prev_reservoirs[q]
@@ -57,12 +57,12 @@ def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_came
     s = ris_init()
     # current sample
     d[0] = p_c * c.M
-    d[1] = luminance(unshadowed_contribution(scene, sq.hit, sq.frame, sq.wi, sq.mat, c)) * Mq
+    d[1] = luminance(unshadowed_contribution(scene, sq, c)) * Mq
     s = ris_stream(s, balance_weight(d, 2, 0) * p_c * c.W, p_c, c.M, 0, rng_uniform(key, base))
     # previous sample
-    p_c_at_q = luminance(unshadowed_contribution(scene, sc.hit, sc.frame, sc.wi, sc.mat, r))
+    p_c_at_q = luminance(unshadowed_contribution(scene, sc, r))
     d[0] = p_c_at_q * c.M
-    d[1] = luminance(unshadowed_contribution(scene, sq.hit, sq.frame, sq.wi, sq.mat, r)) * Mq
+    d[1] = luminance(unshadowed_contribution(scene, sq, r)) * Mq
     w_prev = balance_weight(d, 2, 1) * p_c_at_q * r.W
     if params.mut_temporal_overweight != 0:
         w_prev = w_prev * 1.5

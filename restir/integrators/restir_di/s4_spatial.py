@@ -35,7 +35,7 @@ def spatial_kernel(offset: int, scene: SceneDevice, params: DIParams, width: int
     if sc.valid == 0:
         reservoirs_out[pixel] = c
         return
-    p_c = luminance(unshadowed_contribution(scene, sc.hit, sc.frame, sc.wi, sc.mat, c))
+    p_c = luminance(unshadowed_contribution(scene, sc, c))
     if params.mut_skip_zero_canonical != 0 and p_c * c.W == 0.0:
         reservoirs_out[pixel] = c
         return
@@ -63,14 +63,14 @@ def spatial_kernel(offset: int, scene: SceneDevice, params: DIParams, width: int
             continue
         V += 1
         # ---- the neighbour's sample, resampled in this pixel's domain
-        p_c_at_n = luminance(unshadowed_contribution(scene, sc.hit, sc.frame, sc.wi, sc.mat, r))
-        p_n_at_n = luminance(unshadowed_contribution(scene, sn.hit, sn.frame, sn.wi, sn.mat, r))
+        p_c_at_n = luminance(unshadowed_contribution(scene, sc, r))
+        p_n_at_n = luminance(unshadowed_contribution(scene, sn, r))
         m_n = pairwise_neighbor_weight(p_n_at_n * r.M, p_c_at_n * c.M, params.spatial_k)
         s = ris_stream(s, m_n * p_c_at_n * r.W, p_c_at_n, r.M, j, rng_uniform(key, base + wp.uint32(4 * j + 2)))
         if s.selected == j:
             out = r
         # ---- this pixel's share against that neighbour
-        p_n_at_c = luminance(unshadowed_contribution(scene, sn.hit, sn.frame, sn.wi, sn.mat, c))
+        p_n_at_c = luminance(unshadowed_contribution(scene, sn, c))
         m_c += pairwise_canonical_term(p_c * c.M, p_n_at_c * r.M, params.spatial_k)
     s = ris_stream(s, m_c * p_c * c.W, p_c, c.M, 1000, rng_uniform(key, base + wp.uint32(255)))
     if s.selected == 1000:

@@ -32,14 +32,11 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
     sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
     if sh.valid != 0:
         hit = sh.hit
-        mat = sh.mat
-        frame = sh.frame
-        wi = sh.wi
         weight = gb_weight[pixel]
         # ---- resampled smooth part
         r = reservoirs[pixel]
         if r.W > 0.0:
-            f = unshadowed_contribution(scene, hit, frame, wi, mat, r)
+            f = unshadowed_contribution(scene, sh, r)
             if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
                 rays += 1
                 if light_visible(scene, hit, r):
@@ -47,9 +44,9 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
         # ---- delta lobes: one BSDF sample, kept when it chose a delta lobe
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_SHADE), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
-        bs = bsdf_sample(mat, wi, rng_uniform(key, base), rng_uniform2(key, base + wp.uint32(1)))
+        bs = bsdf_sample(sh.mat, sh.wi, rng_uniform(key, base), rng_uniform2(key, base + wp.uint32(1)))
         if bs.valid != 0 and bs.is_delta != 0:
-            d = wp.normalize(to_world(frame, bs.wo))
+            d = wp.normalize(to_world(sh.frame, bs.wo))
             h2 = trace_closest(scene, offset_origin(hit.p, hit.ng, d), d, T_MAX)
             rays += 1
             Le = wp.vec3(0.0)
