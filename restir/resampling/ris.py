@@ -20,6 +20,7 @@ class RisState:
     M: float           # confidence accumulated from all inputs
     selected: int      # caller's index of the selected input, -1 while none
     nonfinite: int     # inputs whose weight was NaN or inf (counted, then treated as 0)
+    zero: int          # inputs whose weight was 0 (kept as inputs; counted for the stats)
 
 
 @wp.func
@@ -30,6 +31,7 @@ def ris_init() -> RisState:
     s.M = 0.0
     s.selected = -1
     s.nonfinite = 0
+    s.zero = 0
     return s
 
 
@@ -51,6 +53,8 @@ def ris_stream(s: RisState, w: float, p_hat: float, M: float, index: int, u: flo
     if not is_finite(weight):
         r.nonfinite = s.nonfinite + 1
         weight = 0.0
+    if weight <= 0.0:
+        r.zero = s.zero + 1
     if weight > 0.0:
         r.w_sum = s.w_sum + weight
         if u * r.w_sum < weight:

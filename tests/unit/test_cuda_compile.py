@@ -8,9 +8,10 @@ KERNEL_MODULES = [
     "restir.integrators.path",
     "restir.integrators.restir_di.s1_gbuffer",
     "restir.integrators.restir_di.s2_initial",
-    "restir.integrators.restir_di.s3_temporal",
-    "restir.integrators.restir_di.s4_spatial",
-    "restir.integrators.restir_di.s5_shade",
+    "restir.integrators.restir_di.s3_visibility",
+    "restir.integrators.restir_di.s4_temporal",
+    "restir.integrators.restir_di.s5_spatial",
+    "restir.integrators.restir_di.s6_shade",
 ]
 
 

@@ -1,5 +1,5 @@
-"""ReSTIR DI as a pipeline of stages: G-buffer, initial RIS, temporal reuse, spatial reuse
-rounds, shading.
+"""ReSTIR DI as a pipeline of stages: G-buffer, initial RIS, visibility, temporal reuse,
+spatial reuse rounds, shading.
 
 render_frame is the table of contents; each stage is one kernel in its own file.
 """
@@ -8,33 +8,46 @@ import warp as wp
 
 from ...parallel import launch_pixels
 from ..base import Integrator
+from .events import COUNTER_NAMES, EV_RAYS
 from .params import DIParams
 from .reservoir import DIReservoir
 from .s1_gbuffer import gbuffer_kernel
 from .s2_initial import initial_kernel
-from .s3_temporal import temporal_kernel
-from .s4_spatial import spatial_kernel
-from .s5_shade import shade_kernel
+from .s3_visibility import visibility_kernel
+from .s4_temporal import temporal_kernel
+from .s5_spatial import spatial_kernel
+from .s6_shade import shade_kernel
 
 
 class ReSTIRDI(Integrator):
     name = "restir-di"
-    STAGES = ("gbuffer", "initial", "temporal", "spatial", "shade")
-    KERNELS = (gbuffer_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
+    STAGES = ("gbuffer", "initial", "visibility", "temporal", "spatial", "shade")
+    KERNELS = (gbuffer_kernel, initial_kernel, visibility_kernel, temporal_kernel, spatial_kernel, shade_kernel)
     # Literature defaults (see docs/restir_di.md): 32 light candidates; temporal reuse with the
     # history capped at 20x the current confidence; spatial reuse with 3 neighbours in a 30 px
     # radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
-    SETTINGS = {"candidates": 32, "temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2,
+    SETTINGS = {"candidates": 32, "candidates.bsdf": 1, "visibility": "reuse", "temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2,
                 "spatial.neighbors": 3, "spatial.radius": 30.0, "debug.mutation": "none"}
-    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place", "temporal_overweight")
+    VISIBILITY = ("reuse", "shading")
+    MUTATIONS = ("none", "drop_empty_neighbors", "skip_zero_canonical", "spatial_in_place", "temporal_overweight",
+                 "bsdf_unshadowed_reuse")
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
     @staticmethod
     def check_settings(settings: dict) -> None:
         from ...config import ConfigError
 
-        if settings["candidates"] < 1:
-            raise ConfigError("candidates must be >= 1")
+        if settings["candidates"] < 0 or settings["candidates.bsdf"] < 0 or \
+                settings["candidates"] + settings["candidates.bsdf"] < 1:
+            raise ConfigError("candidates and candidates.bsdf must be >= 0, with at least one candidate")
+        if settings["visibility"] not in ReSTIRDI.VISIBILITY:
+            raise ConfigError(f"visibility must be one of {', '.join(ReSTIRDI.VISIBILITY)}")
+        reuse = settings["temporal"] or settings["spatial.rounds"] > 0
+        if settings["candidates.bsdf"] > 0 and settings["visibility"] == "shading" and reuse and \
+                settings["debug.mutation"] != "bsdf_unshadowed_reuse":
+            # p_B omits V, so W is valid only for visibility-aware targets once samples are reused
+            raise ConfigError("candidates.bsdf > 0 with reuse needs visibility=reuse "
+                              "(unshadowed reuse of BSDF candidates is biased; see docs/restir_di.md)")
         if not 0 <= settings["spatial.rounds"] <= 8 or not 1 <= settings["spatial.neighbors"] <= 32:
             raise ConfigError("spatial.rounds must be in [0, 8] and spatial.neighbors in [1, 32]")
         if settings["spatial.radius"] <= 0:
@@ -59,8 +72,7 @@ class ReSTIRDI(Integrator):
         self.reservoirs = self.buffer("reservoirs", DIReservoir)
         self.reservoirs_back = self.buffer("reservoirs_back", DIReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
-        self.shade_rays = self.buffer("shade_rays", wp.int32)
-        self.nonfinite = self.buffer("nonfinite", wp.int32)  # per-stage scratch, summed into counters
+        self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into counters
 
     def params(self, frame: int, sample: int) -> DIParams:
         p = DIParams()
@@ -68,6 +80,8 @@ class ReSTIRDI(Integrator):
         p.frame = wp.uint32(frame)
         p.sample = sample
         p.candidates = int(self.settings["candidates"])
+        p.bsdf_candidates = int(self.settings["candidates.bsdf"])
+        p.visibility = int(self.settings["visibility"] == "reuse")
         p.hide_emitters = int(bool(self.settings["hide_emitters"]))
         p.temporal_cap = float(self.settings["temporal.cap"])
         p.spatial_round = 0
@@ -80,8 +94,15 @@ class ReSTIRDI(Integrator):
         return p
 
     def launch(self, stage: str, kernel, inputs: list, outputs: list) -> None:
+        """Run one stage; every stage writes `events` last, which is summed into the counters."""
         with self.timer.stage(stage):
-            launch_pixels(kernel, self.num_pixels, inputs, outputs, self.device, self.slices, self.reverse_launch)
+            launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
+                          self.reverse_launch)
+        ev = self.events.numpy().sum(axis=0, dtype=np.int64)
+        names = ("nonfinite_outputs" if stage == "shade" else "nonfinite_weights",) + COUNTER_NAMES[1:]
+        for i, name in enumerate(names):
+            self.counters[name] = self.counters.get(name, 0) + int(ev[i])
+        self.rays += int(ev[EV_RAYS])
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene
@@ -92,27 +113,26 @@ class ReSTIRDI(Integrator):
             gb = [self.gb_tri, self.gb_bary, self.gb_t, self.gb_dir]
             prev_gb = [self.prev_tri, self.prev_bary, self.prev_t, self.prev_dir]
             self.launch("gbuffer", gbuffer_kernel, [sc, camera, p], [*gb, self.gb_weight, self.emission])
-            self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs, self.nonfinite])
-            self.count("nonfinite_weights", self.nonfinite)
+            self.launch("initial", initial_kernel, [sc, p, *gb], [self.reservoirs])
+            if p.visibility:
+                self.launch("visibility", visibility_kernel, [sc, p, *gb, self.reservoirs], [self.reservoirs_back])
+                self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs
             if self.settings["temporal"] and self.prev_camera is not None:
                 self.launch("temporal", temporal_kernel,
                             [sc, p, self.prev_camera, *gb, *prev_gb, self.reservoirs, self.prev_reservoirs],
-                            [self.reservoirs_back, self.nonfinite])
-                self.count("nonfinite_weights", self.nonfinite)
+                            [self.reservoirs_back])
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs
             for rd in range(self.settings["spatial.rounds"]):
                 p.spatial_round = rd
                 if self.settings["debug.mutation"] == "spatial_in_place":  # race, for the R2 test only
                     self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
-                                [self.reservoirs, self.nonfinite])
+                                [self.reservoirs])
                     continue
                 self.launch("spatial", spatial_kernel, [sc, p, self.width, self.height, *gb, self.reservoirs],
-                            [self.reservoirs_back, self.nonfinite])
-                self.count("nonfinite_weights", self.nonfinite)
+                            [self.reservoirs_back])
                 self.reservoirs, self.reservoirs_back = self.reservoirs_back, self.reservoirs  # ping-pong
             self.launch("shade", shade_kernel, [sc, p, *gb, self.gb_weight, self.emission, self.reservoirs],
-                        [self.sample_L, self.shade_rays, self.nonfinite])
-            self.count("nonfinite_outputs", self.nonfinite)
+                        [self.sample_L])
             # this sample's final reservoirs and G-buffer become the next one's history (swap)
             self.reservoirs, self.prev_reservoirs = self.prev_reservoirs, self.reservoirs
             self.gb_tri, self.prev_tri = self.prev_tri, self.gb_tri
@@ -120,7 +140,6 @@ class ReSTIRDI(Integrator):
             self.gb_t, self.prev_t = self.prev_t, self.gb_t
             self.gb_dir, self.prev_dir = self.prev_dir, self.gb_dir
             self.prev_camera = camera
-            self.rays += self.num_pixels + int(self.shade_rays.numpy().sum(dtype=np.int64))  # primary + shade
             L = self.sample_L.numpy().astype(np.float64)
             n += 1
             if mean is None:

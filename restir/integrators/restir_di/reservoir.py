@@ -6,13 +6,14 @@ in its measure (J = 1). The integrand at a primary hit x (smooth BSDF lobes only
 
     f_x(y) = f_s(x, wo, w_y) * Le(y -> x) * G(x, y) * V(x, y),   G = |cos theta_y| / d^2 (1 for env)
 
-`unshadowed_contribution` is f_x without V; the target is p_hat = luminance of it.
+`unshadowed_contribution` is f_x without V. The target p_hat is its luminance, times V when
+targets are visibility-aware (setting `visibility = reuse`; see docs/restir_di.md).
 """
 import warp as wp
 
-from ...device.bsdf import bsdf_eval
+from ...device.bsdf import bsdf_eval, bsdf_pdf
 from ...device.intersect import SurfaceHit, T_MAX, is_visible, offset_origin
-from ...device.lights import env_eval, triangle_emission
+from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.sampling import to_local
 from ...device.scene_device import SceneDevice
 from .gbuffer import Shading
@@ -86,3 +87,55 @@ def light_visible(scene: SceneDevice, hit: SurfaceHit, r: DIReservoir) -> bool:
     seg = target - origin
     dist = wp.length(seg)
     return dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
+
+
+@wp.func
+def target(scene: SceneDevice, sh: Shading, r: DIReservoir, visibility: int) -> wp.vec2:
+    """(p_hat_x(y), shadow rays traced) for r's sample y at the primary hit sh.
+
+    With visibility-aware targets a ray is traced only when it can matter: a sample with W = 0
+    enters every weight multiplied by its W, so its target is reported as 0 without a ray.
+    """
+    p = luminance(unshadowed_contribution(scene, sh, r))
+    if visibility == 0 or p <= 0.0:
+        return wp.vec2(p, 0.0)
+    if r.W <= 0.0:
+        return wp.vec2(0.0, 0.0)
+    if light_visible(scene, sh.hit, r):
+        return wp.vec2(p, 1.0)
+    return wp.vec2(0.0, 1.0)
+
+
+@wp.func
+def own_target(scene: SceneDevice, sh: Shading, r: DIReservoir, visibility: int) -> float:
+    """p_hat of a stored reservoir's sample at the primary hit of the pixel that stores it.
+
+    With visibility-aware targets W > 0 implies V = 1 there (the sample survived the visibility
+    stage or was selected with a visibility-aware target in that domain), so no ray is needed.
+    """
+    p = luminance(unshadowed_contribution(scene, sh, r))
+    if visibility != 0 and r.W <= 0.0:
+        return 0.0
+    return p
+
+
+@wp.func
+def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bsdf: int) -> wp.vec2:
+    """(p_L(y), p_B(y)): the densities with which light sampling and BSDF sampling at sh produce
+    r's sample y, both in y's measure (area on a triangle, solid angle toward the environment).
+    p_B omits V(x, y); why that is sound only with visibility-aware reuse: docs/restir_di.md."""
+    dd = direction_to_light(r, sh.hit.p)
+    d = wp.vec3(dd[0], dd[1], dd[2])
+    if r.light_tri == -2 or dd[3] <= 0.0:
+        return wp.vec2(0.0, 0.0)
+    p_L = float(0.0)
+    to_measure = float(1.0)  # solid angle -> y's measure
+    if r.light_tri == -1:
+        p_L = env_pdf(scene, d)
+    else:
+        p_L = (1.0 - scene.env_select_prob) * scene.tri_light_pdf[r.light_tri]
+        to_measure = wp.abs(wp.dot(r.light_n, d)) / (dd[3] * dd[3])
+    p_B = float(0.0)
+    if with_bsdf != 0:
+        p_B = bsdf_pdf(sh.mat, sh.wi, to_local(sh.frame, d)) * to_measure
+    return wp.vec2(p_L, p_B)

@@ -2,7 +2,7 @@
 
 Reads: scene, camera. Writes: gb_tri, gb_bary, gb_t (hit: rebuilt by surface_at), gb_dir
 (primary ray direction), gb_weight (filter weight), emission (emitted radiance seen directly,
-times the filter weight; the depth-1 term of max_depth 2).
+times the filter weight; the depth-1 term of max_depth 2), events (one ray).
 """
 import warp as wp
 
@@ -18,7 +18,8 @@ from .params import DIParams
 @wp.kernel
 def gbuffer_kernel(offset: int, scene: SceneDevice, camera: Camera, params: DIParams,
                    gb_tri: wp.array(dtype=wp.int32), gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float),
-                   gb_dir: wp.array(dtype=wp.vec3), gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3)):
+                   gb_dir: wp.array(dtype=wp.vec3), gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
+                   events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_GBUFFER), wp.uint32(pixel))
     base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
@@ -36,3 +37,4 @@ def gbuffer_kernel(offset: int, scene: SceneDevice, camera: Camera, params: DIPa
         elif scene.env_kind != ENV_NONE:
             Le = env_eval(scene, ray.d)
     emission[pixel] = Le * ray.weight
+    events[pixel] = wp.vec4i(0, 0, 0, 1)

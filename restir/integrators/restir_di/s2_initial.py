@@ -1,67 +1,118 @@
-"""Stage 2, initial resampling: RIS over `candidates` light samples per pixel (Bitterli 2020, Alg. 3).
+"""Stage 2, initial resampling: RIS over N_L light and N_B BSDF candidates per pixel
+(Bitterli 2020, Alg. 3; the two generators combined as in Talbot 2005's multiple-distribution RIS).
 
-Candidates y_j come from the NEE light sampler (power-proportional triangles uniform by area,
-or the environment), with density p(y_j) in the sample's measure; the target is
-p_hat(y) = luminance(f_s Le G) without visibility. Weights w_j = p_hat(y_j) / (N p(y_j)),
-W = w_sum / p_hat(y), M = 1. Delta-only surfaces and misses keep an empty reservoir.
-Reads: scene, G-buffer. Writes: reservoirs, nonfinite (count of NaN/inf weights, per pixel).
+Light candidates come from the NEE light sampler (power-proportional triangles uniform by area,
+or the environment); BSDF candidates trace the smooth lobes' sample and keep the emitter it hits
+(or the environment it escapes to). Every candidate y is a light point in its own measure and
+is weighted by the balance heuristic over both generators:
+
+    w(y) = p_hat(y) / (N_L p_L(y) + N_B p_B(y)),   W = w_sum / p_hat(y_selected),   M = 1,
+
+with p_hat = luminance(f_s Le G) (unshadowed: visibility is the next stage's job). A BSDF
+sample that picks a delta lobe, misses every emitter or fails is a candidate of weight 0.
+Delta-only surfaces and misses keep an empty reservoir.
+Reads: scene, G-buffer. Writes: reservoirs, events (non-finite and zero weights, rays).
 """
 import warp as wp
 
-from ...device.bsdf import bsdf_is_delta_only
+from ...device.bsdf import bsdf_is_delta_only, bsdf_sample
+from ...device.intersect import T_MAX, offset_origin, trace_closest
 from ...device.lights import sample_light
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
+from ...device.sampling import to_world
 from ...device.scene_device import SceneDevice
-from ...device.types import DIMS_PER_SAMPLE, STAGE_DI_INITIAL
+from ...device.types import DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_INITIAL
 from ...resampling.ris import ris_contribution_weight, ris_init, ris_stream
-from .gbuffer import load_shading
+from .events import stage_events
+from .gbuffer import Shading, load_shading
 from .params import DIParams
-from .reservoir import DIReservoir, empty_reservoir, luminance, unshadowed_contribution
+from .reservoir import DIReservoir, candidate_densities, empty_reservoir, luminance, unshadowed_contribution
+
+
+@wp.func
+def light_candidate(scene: SceneDevice, sh: Shading, u_sel: float, u: wp.vec2) -> DIReservoir:
+    cand = empty_reservoir()
+    ls = sample_light(scene, sh.hit.p, u_sel, u)
+    if ls.pdf > 0.0:
+        cand.light_tri = ls.tri
+        if ls.is_env != 0:
+            cand.light_y = ls.wi
+        else:
+            cand.light_y = ls.p
+            cand.light_n = ls.n
+            cand.light_ns = ls.ns
+    return cand
+
+
+@wp.func
+def bsdf_direction(sh: Shading, u_lobe: float, u: wp.vec2) -> wp.vec4:
+    """(world direction, 1) of a BSDF sample of the smooth lobes; (0, 0, 0, 0) for a delta lobe or
+    a failed sample (the candidate then has weight 0)."""
+    bs = bsdf_sample(sh.mat, sh.wi, u_lobe, u)
+    if bs.valid == 0 or bs.is_delta != 0 or bs.pdf <= 0.0:
+        return wp.vec4(0.0)
+    d = wp.normalize(to_world(sh.frame, bs.wo))
+    return wp.vec4(d[0], d[1], d[2], 1.0)
+
+
+@wp.func
+def light_point_along(scene: SceneDevice, sh: Shading, d: wp.vec3) -> DIReservoir:
+    """The light point the ray from sh along d reaches first (no sample: light_tri = -2)."""
+    cand = empty_reservoir()
+    h = trace_closest(scene, offset_origin(sh.hit.p, sh.hit.ng, d), d, T_MAX)
+    if h.valid != 0:
+        if scene.tri_light_pdf[h.tri] > 0.0:
+            cand.light_tri = h.tri
+            cand.light_y = h.p
+            cand.light_n = h.ng
+            cand.light_ns = h.ns
+    elif scene.env_kind != ENV_NONE:
+        cand.light_tri = -1
+        cand.light_y = d
+    return cand
 
 
 @wp.kernel
 def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
                    gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
-                   reservoirs: wp.array(dtype=DIReservoir), nonfinite: wp.array(dtype=wp.int32)):
+                   reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     out = empty_reservoir()
-    bad = int(0)
+    s = ris_init()
+    rays = int(0)
     sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
-    if sh.valid != 0:
-        if bsdf_is_delta_only(sh.mat) == 0:
-            key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
-            base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
-            s = ris_init()
-            for j in range(params.candidates):
-                dim = base + wp.uint32(4 * j)
-                ls = sample_light(scene, sh.hit.p, rng_uniform(key, dim), rng_uniform2(key, dim + wp.uint32(1)))
-                cand = empty_reservoir()
-                p_source = float(0.0)
-                if ls.pdf > 0.0:
-                    cand.light_tri = ls.tri
-                    if ls.is_env != 0:
-                        cand.light_y = ls.wi
-                        p_source = ls.pdf
-                    else:
-                        cand.light_y = ls.p
-                        cand.light_n = ls.n
-                        cand.light_ns = ls.ns
-                        # the sampler's solid-angle pdf, converted to area measure at the light
-                        p_source = ls.pdf * wp.abs(wp.dot(ls.n, ls.wi)) / (ls.dist * ls.dist)
-                # Zero-weight candidates are still inputs (they count and are never selected).
-                w = float(0.0)
-                p_hat = float(0.0)
-                if p_source > 0.0:
-                    p_hat = luminance(unshadowed_contribution(scene, sh, cand))
-                    w = p_hat / (float(params.candidates) * p_source)
-                s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(3)))
-                if s.selected == j:
-                    out = cand
-            bad = s.nonfinite
-            out.W = ris_contribution_weight(s, 1.0)
+    if sh.valid != 0 and bsdf_is_delta_only(sh.mat) == 0:
+        key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
+        base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
+        n_L = float(params.candidates)
+        n_B = float(params.bsdf_candidates)
+        for j in range(params.candidates + params.bsdf_candidates):
+            dim = base + wp.uint32(4 * j)
+            u_sel = rng_uniform(key, dim)
+            u = rng_uniform2(key, dim + wp.uint32(1))
+            cand = empty_reservoir()
+            if j < params.candidates:
+                cand = light_candidate(scene, sh, u_sel, u)
+            else:
+                bd = bsdf_direction(sh, u_sel, u)
+                if bd[3] > 0.0:
+                    cand = light_point_along(scene, sh, wp.vec3(bd[0], bd[1], bd[2]))
+                    rays += 1
+            # Zero-weight candidates are still inputs (they count and are never selected).
+            p = candidate_densities(scene, sh, cand, params.bsdf_candidates)
+            p_source = n_L * p[0] + n_B * p[1]
+            w = float(0.0)
+            p_hat = float(0.0)
+            if p_source > 0.0:
+                p_hat = luminance(unshadowed_contribution(scene, sh, cand))
+                w = p_hat / p_source
+            s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(3)))
+            if s.selected == j:
+                out = cand
+        out.W = ris_contribution_weight(s, 1.0)
+        out.M = 1.0
+        if out.W <= 0.0:
+            out = empty_reservoir()
             out.M = 1.0
-            if out.W <= 0.0:
-                out = empty_reservoir()
-                out.M = 1.0
     reservoirs[pixel] = out
-    nonfinite[pixel] = bad
+    events[pixel] = stage_events(s, 0, rays)

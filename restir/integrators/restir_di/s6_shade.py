@@ -1,10 +1,11 @@
 """Stage 5, shading: the pixel's estimate of direct illumination (max_depth 2).
 
-L = emission + f_s Le G V(y) W  (the resampled smooth part; V traced here)
+L = emission + f_s Le G V(y) W  (the resampled smooth part; V traced here, unless targets were
+      visibility-aware: then W > 0 already implies V = 1 at this pixel)
       + the delta lobes' direct light, by BSDF sampling (kept only when a delta lobe is chosen;
         the smooth lobes are the resampled part's), all times the filter weight.
-Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, shade_rays, nonfinite (NaN/inf outputs,
-counted and kept: never silently zeroed).
+Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, events (NaN/inf outputs, counted
+and kept: never silently zeroed; rays).
 """
 import warp as wp
 
@@ -25,7 +26,7 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
                  gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
                  gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
                  reservoirs: wp.array(dtype=DIReservoir), sample_L: wp.array(dtype=wp.vec3),
-                 shade_rays: wp.array(dtype=wp.int32), nonfinite: wp.array(dtype=wp.int32)):
+                 events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     L = emission[pixel]
     rays = int(0)
@@ -37,7 +38,9 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
         r = reservoirs[pixel]
         if r.W > 0.0:
             f = unshadowed_contribution(scene, sh, r)
-            if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
+            if params.visibility != 0:
+                L += f * (r.W * weight)
+            elif f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
                 rays += 1
                 if light_visible(scene, hit, r):
                     L += f * (r.W * weight)
@@ -56,5 +59,5 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
                 Le = env_eval(scene, d)
             L += wp.cw_mul(bs.weight, Le) * weight
     sample_L[pixel] = L
-    shade_rays[pixel] = rays
-    nonfinite[pixel] = wp.where(L[0] == L[0] and L[1] == L[1] and L[2] == L[2] and wp.abs(L[0] + L[1] + L[2]) < 3.0e38, 0, 1)
+    finite = L[0] == L[0] and L[1] == L[1] and L[2] == L[2] and wp.abs(L[0] + L[1] + L[2]) < 3.0e38
+    events[pixel] = wp.vec4i(wp.where(finite, 0, 1), 0, 0, rays)

@@ -1,0 +1,33 @@
+"""Stage 3, visibility (only with visibility-aware targets, `visibility = reuse`): one shadow
+ray for the initial sample; an occluded sample keeps its confidence but gets W = 0.
+
+Why this is unbiased: with W' = W V(y), E[g(y) W'] = integral of g V over the light points, so W'
+is an unbiased contribution weight for the target p_hat V, whose support is exactly the light
+points visible from this pixel. Every later stage then resamples with p_hat V, so each
+technique's support and its target's support agree (Bitterli et al. 2020, Sec. 4's visibility
+reuse; here with visibility in the reuse targets too, which keeps it unbiased).
+Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer), events.
+"""
+import warp as wp
+
+from ...device.scene_device import SceneDevice
+from .gbuffer import load_shading
+from .params import DIParams
+from .reservoir import DIReservoir, light_visible
+
+
+@wp.kernel
+def visibility_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
+                      gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
+                      reservoirs_in: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
+                      events: wp.array(dtype=wp.vec4i)):
+    pixel = wp.tid() + offset
+    r = reservoirs_in[pixel]
+    rays = int(0)
+    if r.W > 0.0:
+        sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+        rays = 1
+        if not light_visible(scene, sh.hit, r):
+            r.W = 0.0
+    reservoirs_out[pixel] = r
+    events[pixel] = wp.vec4i(0, 0, 0, rays)
