@@ -10,6 +10,7 @@ import sys
 import warnings
 
 from .config import ConfigError, RenderConfig
+from .scene.builtin import BUILTINS
 from .scene.errors import SceneError, SceneWarning
 
 
@@ -24,8 +25,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="restir", description="Research renderer for resampled path tracing.")
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene")
-    r.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (cornell-box, cornell-box-glossy, furnace, sphere-cap)")
-    r.add_argument("--method", default="pt", help="pt (path tracer) or restir-di (direct light; canonical resampling so far)")
+    r.add_argument("scene", help=f"Mitsuba 3 XML file or builtin:NAME ({', '.join(BUILTINS)})")
+    r.add_argument("--method", default="pt", help="pt (path tracer) or restir-di (direct light: emission plus one "
+                   "bounce; settings with --set, listed in docs/restir_di.md)")
     r.add_argument("--spp", type=int, help="samples per pixel per frame (default: the scene's)")
     r.add_argument("--frames", type=int, default=1, help="frames to render and average")
     r.add_argument("--width", type=int)
