@@ -138,6 +138,8 @@ def _validate(args) -> int:
     for channel, rep in zip("RGB", result.report.reports):
         print(f"{channel}: {rep}")
     print(f"minimum detectable bias (image level, 80% power): {100 * result.report.mdb:.2f}%")
+    if result.tested.counters:
+        print("counters over all runs: " + ", ".join(f"{k} {v}" for k, v in sorted(result.tested.counters.items())))
     if result.report.mdb > 0.05:
         print("note: 'pass' only rules out biases above that; raise --runs, --frames or --spp", file=sys.stderr)
     print(f"verdict: {result.verdict}")

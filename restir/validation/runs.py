@@ -19,25 +19,35 @@ class IndependentRuns:
 
     Exposes `image` (mean over runs), `batch_variance_of_mean` (variance of that mean),
     `batch_skewness`, `batch_excess_kurtosis` and `frames` (= runs, for degrees of freedom),
-    the interface the z-tests read.
+    the interface the z-tests read, and `counters`: the renders' event counters summed over
+    runs (non-finite values, zero-weight candidates, failed shifts, rays).
+
+    The harness tests the unbiased build only: a render whose `debug.mutation` setting is not
+    "none" (fault injection) is refused unless `allow_mutation` is set (the power checks).
     """
 
-    def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0):
+    def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0, allow_mutation: bool = False):
         if runs < 2:
             from ..config import ConfigError
 
             raise ConfigError("at least 2 independent runs are needed")
         sums = None
         self.stats = []
+        self.counters: dict[str, int] = {}
         images = []
         for k in range(runs):
             cfg = copy.copy(config)
             cfg.seed = seed0 + k
             r = render(scene, cfg)
             self.stats.append(r.stats)
+            mutation = r.stats["settings"].get("debug.mutation", "none")
+            if mutation != "none" and not allow_mutation:
+                raise AssertionError(f"debug.mutation={mutation} is a biased fault injection; the harness tests "
+                                     "the unbiased build only")
             for name, n in r.stats.get("counters", {}).items():
                 if name.startswith("nonfinite") and n:
                     raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable (TESTING.md 5.1)")
+                self.counters[name] = self.counters.get(name, 0) + n
             x = r.image.astype(np.float64)
             images.append(r.image)
             if sums is None:
@@ -71,10 +81,7 @@ class Validation:
         return "fail"
 
     def zmap(self) -> np.ndarray:
-        """Per-pixel z of the luminance channel as an RGB image: red above, blue below the reference."""
-        z = np.mean([r.pixel_z for r in self.report.reports], axis=0)
-        z = np.clip(np.nan_to_num(z) / 5.0, -1, 1)
-        return np.stack([np.maximum(z, 0), np.zeros_like(z), np.maximum(-z, 0)], -1).astype(np.float32)
+        return self.report.zmap()
 
 
 def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, reference_runs: int | None = None,

@@ -219,5 +219,12 @@ class RGBZTest:
     def mdb(self) -> float:
         return max(r.mdb for r in self.reports)
 
+    def zmap(self) -> np.ndarray:
+        """Per-pixel z averaged over the channels as an RGB image: red where the estimate is
+        above the reference, blue below, full intensity at |z| >= 5 (TESTING.md 5.12)."""
+        z = np.mean([r.pixel_z for r in self.reports], axis=0)
+        z = np.clip(np.nan_to_num(z) / 5.0, -1, 1)
+        return np.stack([np.maximum(z, 0), np.zeros_like(z), np.maximum(-z, 0)], -1).astype(np.float32)
+
     def __str__(self) -> str:
         return "\n".join(f"  {c}: {r}" for c, r in zip("RGB", self.reports))

@@ -10,7 +10,7 @@ import pytest
 
 import restir
 from restir.scene.builtin import sphere_cap_radiance
-from restir.validation.stats import RGBZTest
+from restir.validation import assert_matches
 
 
 FRAMES = 32
@@ -23,17 +23,8 @@ ANALYTIC_REL_TOL = 5e-4
 
 
 def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0, other=None, abs_tol=0.0):
-    """Test r against a reference value/image; `other` is the reference's RenderResult when it is noisy."""
-    skew, kurt = np.abs(r.batch_skewness), r.batch_excess_kurtosis
-    if other is not None:  # the worse of the two sides decides whether pixel statistics are normal
-        skew, kurt = np.maximum(skew, np.abs(other.batch_skewness)), np.maximum(kurt, other.batch_excess_kurtosis)
-    rep = RGBZTest(r.image, r.batch_variance_of_mean, reference, reference_var, tile=tile,
-                   df=r.frames - 1, skew=skew, rel_tol=rel_tol, kurtosis=kurt, abs_tol=abs_tol,
-                   batches=getattr(r, "batches", None),
-                   ref_batches=None if other is None else getattr(other, "batches", None))
-    print(rep)
-    assert rep.passed, str(rep)
-    return rep
+    """Test r against a reference value/image; `other` is the reference's result when it is noisy."""
+    return assert_matches(r, reference, reference_var, other=other, tile=tile, rel_tol=rel_tol, abs_tol=abs_tol)
 
 
 def render(spec, device, strategy="mis", spp=4, max_depth=None, seed=0, frames=FRAMES, **scene_args):

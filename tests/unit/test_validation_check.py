@@ -1,0 +1,39 @@
+"""The harness's pytest helper: a failing check leaves a z-map image, a passing one nothing."""
+import numpy as np
+import pytest
+
+from restir.image_io import read_image
+from restir.validation import assert_matches
+
+
+class Batches:
+    """K independent normal batch estimates of an image (the interface the helper reads)."""
+
+    def __init__(self, mean, k=32, sigma=0.01, seed=0):
+        rng = np.random.default_rng(seed)
+        self.batches = mean + sigma * rng.standard_normal((k,) + mean.shape)
+        self.image = self.batches.mean(0)
+        self.batch_variance_of_mean = self.batches.var(0, ddof=1) / k
+        self.batch_skewness = np.zeros(mean.shape)
+        self.batch_excess_kurtosis = np.zeros(mean.shape)
+        self.frames = k
+
+
+def test_failing_check_writes_a_zmap(tmp_path, monkeypatch):
+    monkeypatch.setenv("RESTIR_ZMAP_DIR", str(tmp_path))
+    ref = np.full((16, 16, 3), 0.5)
+    biased = ref.copy()
+    biased[:8, :8] *= 1.2  # a bright corner: the z-map must show it red, the rest dark
+    with pytest.raises(AssertionError, match="z-map: ") as err:
+        assert_matches(Batches(biased), ref)
+    path = str(err.value).rsplit("z-map: ", 1)[1].strip()
+    assert path.startswith(str(tmp_path)) and "test_failing_check_writes_a_zmap" in path
+    z = read_image(path)
+    assert z[:8, :8, 0].mean() > 0.9 and z[8:, 8:, 0].mean() < 0.5
+
+
+def test_passing_check_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("RESTIR_ZMAP_DIR", str(tmp_path))
+    ref = np.full((16, 16, 3), 0.5)
+    rep = assert_matches(Batches(ref, seed=1), ref)
+    assert rep.passed and not list(tmp_path.iterdir())
