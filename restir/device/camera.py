@@ -6,8 +6,9 @@ from the filter, and `CameraRay.weight` carries f/p where the filter is not samp
 """
 import warp as wp
 
+from .rng import rng_key, rng_uniform2
 from .sampling import sample_cdf, sample_tent
-from .types import FILTER_BOX, FILTER_TENT
+from .types import FILTER_BOX, FILTER_TENT, STAGE_CAMERA
 
 
 @wp.struct
@@ -70,6 +71,17 @@ def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
     r.d = wp.normalize(wp.transform_vector(cam.to_world, d_local))
     r.weight = fx[1] * fy[1]
     return r
+
+
+@wp.func
+def camera_ray(cam: Camera, seed: wp.uint32, frame: wp.uint32, pixel: int, sample: int) -> CameraRay:
+    """The camera ray of sample `sample` of `pixel` in `frame`. Every method draws it from the one
+    camera stream (stage STAGE_CAMERA), so renders with the same seed share their camera
+    samples: comparisons between methods can use common random numbers (the directly seen
+    emission, the same estimator everywhere, then cancels out of the difference)."""
+    key = rng_key(seed, frame, wp.uint32(STAGE_CAMERA), wp.uint32(pixel))
+    return generate_ray(cam, pixel % cam.width, pixel // cam.width,
+                        rng_uniform2(key, wp.uint32(2) * wp.uint32(sample)))
 
 
 @wp.func

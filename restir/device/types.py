@@ -31,8 +31,9 @@ STRATEGY_NEE = wp.constant(1)
 STRATEGY_BSDF = wp.constant(2)
 
 # Random-stream stage ids: no two stages share a stream.
+STAGE_CAMERA = wp.constant(0)      # camera rays of every method (common random numbers)
 STAGE_PATH_TRACE = wp.constant(1)
-STAGE_DI_GBUFFER = wp.constant(10)
+STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (j < 256)
 STAGE_DI_INITIAL = wp.constant(11)
 STAGE_DI_SHADE = wp.constant(12)
 STAGE_DI_TEMPORAL = wp.constant(13)
@@ -41,8 +42,7 @@ STAGE_DI_SPATIAL = wp.constant(20)  # + round index
 # Random dimensions within one sample: DIMS_PER_BOUNCE numbers per bounce.
 DIMS_PER_BOUNCE = wp.constant(8)
 DIMS_PER_SAMPLE = wp.constant(8 * 1024)
-# Offsets of each use inside a bounce (camera uses bounce 0's film slots).
-DIM_FILM = wp.constant(0)          # 2 numbers, bounce 0 only
+# Offsets of each use inside a bounce (slots 0 and 1 are free: camera rays use STAGE_CAMERA).
 DIM_LIGHT_SELECT = wp.constant(2)  # 1 number
 DIM_LIGHT_POINT = wp.constant(3)   # 2 numbers
 DIM_BSDF_LOBE = wp.constant(5)     # 1 number

@@ -6,25 +6,30 @@ a second moment minus the squared mean would cancel catastrophically in float32)
 `max_depth` has Mitsuba's meaning (number of path segments; 1 = directly visible emission,
 2 = direct illumination, -1 = unbounded up to MAX_SEGMENTS). Russian roulette (Mitsuba's rule,
 off by default) starts at `rr_depth`. `strategy` selects MIS (default), NEE-only or BSDF-only,
-three estimators of the same integral used to cross-check each other.
+three estimators of the same integral used to cross-check each other. `nee.samples` light
+samples are taken at every vertex (Mitsuba's `direct` integrator calls them emitter samples);
+with MIS they are combined with the one BSDF sample by the balance heuristic over
+N p_light + p_bsdf. Sample 0 uses the path's own stream; sample j > 0 the stream of stage
+STAGE_PATH_NEE + j, so images with one light sample do not change.
 """
 import numpy as np
 import warp as wp
 
 from ..device.bsdf import bsdf_eval, bsdf_is_delta_only, bsdf_pdf, bsdf_sample
-from ..device.camera import Camera, generate_ray
+from ..device.camera import Camera, camera_ray
 from ..device.intersect import T_MAX, is_visible, offset_origin, trace_closest
 from ..device.lights import env_eval, env_pdf, sample_light, triangle_emission, triangle_light_pdf
 from ..device.rng import rng_key, rng_uniform, rng_uniform2
 from ..device.sampling import frame_from_normal, to_local, to_world
 from ..device.scene_device import SceneDevice, material_at
-from ..device.types import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_FILM, DIM_LIGHT_POINT, DIM_LIGHT_SELECT,
-                            DIMS_PER_BOUNCE, DIMS_PER_SAMPLE, ENV_NONE, STAGE_PATH_TRACE, STRATEGY_BSDF,
+from ..device.types import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT,
+                            DIMS_PER_BOUNCE, DIMS_PER_SAMPLE, ENV_NONE, STAGE_PATH_NEE, STAGE_PATH_TRACE, STRATEGY_BSDF,
                             STRATEGY_MIS, STRATEGY_NEE)
 from ..parallel import launch_pixels
 from .base import Integrator
 
 MAX_SEGMENTS = 1023  # DIMS_PER_SAMPLE / DIMS_PER_BOUNCE - 1: random streams of samples never overlap
+MAX_NEE_SAMPLES = 256  # extra light samples' streams are stage ids STAGE_PATH_NEE + 1 .. + 255
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
 
@@ -38,6 +43,7 @@ class PTParams:
     use_rr: int
     strategy: int
     hide_emitters: int
+    nee_samples: int   # light samples per vertex, N
 
 
 @wp.func
@@ -47,7 +53,7 @@ def emission_weight(params: PTParams, prev_delta: int, p_bsdf: float, p_light: f
         return 1.0
     if params.strategy == STRATEGY_NEE:
         return 0.0
-    return p_bsdf / (p_bsdf + p_light)
+    return p_bsdf / (p_bsdf + float(params.nee_samples) * p_light)
 
 
 @wp.func
@@ -62,7 +68,8 @@ class PathResult:
 
 
 @wp.func
-def path_radiance(scene: SceneDevice, params: PTParams, o_in: wp.vec3, d_in: wp.vec3, key: wp.uint32, base: wp.uint32) -> PathResult:
+def path_radiance(scene: SceneDevice, params: PTParams, o_in: wp.vec3, d_in: wp.vec3, pixel: wp.uint32, key: wp.uint32,
+                  base: wp.uint32) -> PathResult:
     rays = int(0)
     L = wp.vec3(0.0)
     beta = wp.vec3(1.0)
@@ -94,29 +101,34 @@ def path_radiance(scene: SceneDevice, params: PTParams, o_in: wp.vec3, d_in: wp.
         frame = frame_from_normal(hit.ns)
         wi = to_local(frame, -d)
         dim = base + wp.uint32((depth + 1) * DIMS_PER_BOUNCE)
-        # ---- next-event estimation
+        # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B)
         if params.strategy != STRATEGY_BSDF and bsdf_is_delta_only(mat) == 0:
-            ls = sample_light(scene, hit.p, rng_uniform(key, dim + wp.uint32(DIM_LIGHT_SELECT)),
-                              rng_uniform2(key, dim + wp.uint32(DIM_LIGHT_POINT)))
-            if ls.pdf > 0.0 and max3(ls.Le) > 0.0:
-                wo = to_local(frame, ls.wi)
-                f = bsdf_eval(mat, wi, wo)
-                if max3(f) > 0.0:
-                    origin = offset_origin(hit.p, hit.ng, ls.wi)
-                    rays += 1
-                    vis = bool(False)
-                    if ls.is_env != 0:
-                        vis = is_visible(scene, origin, ls.wi, T_MAX)
-                    else:
-                        target = offset_origin(ls.p, ls.n, -ls.wi)
-                        seg = target - origin
-                        dist = wp.length(seg)
-                        vis = dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
-                    if vis:
-                        w = float(1.0)
-                        if params.strategy == STRATEGY_MIS:
-                            w = ls.pdf / (ls.pdf + bsdf_pdf(mat, wi, wo))
-                        L += wp.cw_mul(beta, wp.cw_mul(f, ls.Le)) * (w / ls.pdf)
+            n_light = float(params.nee_samples)
+            for j in range(params.nee_samples):
+                key_j = key
+                if j > 0:
+                    key_j = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_NEE + j), pixel)
+                ls = sample_light(scene, hit.p, rng_uniform(key_j, dim + wp.uint32(DIM_LIGHT_SELECT)),
+                                  rng_uniform2(key_j, dim + wp.uint32(DIM_LIGHT_POINT)))
+                if ls.pdf > 0.0 and max3(ls.Le) > 0.0:
+                    wo = to_local(frame, ls.wi)
+                    f = bsdf_eval(mat, wi, wo)
+                    if max3(f) > 0.0:
+                        origin = offset_origin(hit.p, hit.ng, ls.wi)
+                        rays += 1
+                        vis = bool(False)
+                        if ls.is_env != 0:
+                            vis = is_visible(scene, origin, ls.wi, T_MAX)
+                        else:
+                            target = offset_origin(ls.p, ls.n, -ls.wi)
+                            seg = target - origin
+                            dist = wp.length(seg)
+                            vis = dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
+                        if vis:
+                            p_sum = n_light * ls.pdf
+                            if params.strategy == STRATEGY_MIS:
+                                p_sum += bsdf_pdf(mat, wi, wo)
+                            L += wp.cw_mul(beta, wp.cw_mul(f, ls.Le)) / p_sum
         # ---- BSDF sampling
         bs = bsdf_sample(mat, wi, rng_uniform(key, dim + wp.uint32(DIM_BSDF_LOBE)),
                          rng_uniform2(key, dim + wp.uint32(DIM_BSDF_DIR)))
@@ -154,16 +166,14 @@ def path_trace_kernel(
     frame_rays: wp.array(dtype=wp.int32),
 ):
     pixel = wp.tid() + offset
-    px = pixel % camera.width
-    py = pixel // camera.width
     key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
     mean = wp.vec3(0.0)
     m2 = wp.vec3(0.0)
     rays = int(0)
     for s in range(params.spp):
         base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
-        ray = generate_ray(camera, px, py, rng_uniform2(key, base + wp.uint32(DIM_FILM)))
-        res = path_radiance(scene, params, ray.o, ray.d, key, base)
+        ray = camera_ray(camera, params.seed, params.frame, pixel, s)
+        res = path_radiance(scene, params, ray.o, ray.d, wp.uint32(pixel), key, base)
         L = res.L * ray.weight
         rays += res.rays
         delta = L - mean
@@ -178,7 +188,7 @@ class PathTracer(Integrator):
     name = "pt"
     STAGES = ("path_trace",)
     KERNELS = (path_trace_kernel,)
-    SETTINGS = {"strategy": "mis", "rr": False}
+    SETTINGS = {"strategy": "mis", "rr": False, "nee.samples": 1}
 
     @staticmethod
     def check_settings(settings: dict) -> None:
@@ -186,6 +196,8 @@ class PathTracer(Integrator):
 
         if settings["strategy"] not in STRATEGIES:
             raise ConfigError(f"strategy must be one of {', '.join(STRATEGIES)}")
+        if not 1 <= settings["nee.samples"] <= MAX_NEE_SAMPLES:
+            raise ConfigError(f"nee.samples must be in [1, {MAX_NEE_SAMPLES}]")
 
     def allocate(self) -> None:
         self.frame_mean = self.buffer("frame_mean", wp.vec3)
@@ -203,6 +215,7 @@ class PathTracer(Integrator):
         p.use_rr = int(bool(s["rr"]))
         p.strategy = int(STRATEGIES[s["strategy"]])
         p.hide_emitters = int(bool(s["hide_emitters"]))
+        p.nee_samples = int(s["nee.samples"])
         return p
 
     def render_frame(self, frame: int):

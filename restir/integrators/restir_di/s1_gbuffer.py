@@ -1,17 +1,16 @@
 """Stage 1, G-buffer: one primary hit per pixel and its directly visible emission.
 
-Reads: scene, camera. Writes: gb_tri, gb_bary, gb_t (hit: rebuilt by surface_at), gb_dir
+Reads: scene, camera (the camera stream shared by every method). Writes: gb_tri, gb_bary, gb_t (hit: rebuilt by surface_at), gb_dir
 (primary ray direction), gb_weight (filter weight), emission (emitted radiance seen directly,
 times the filter weight; the depth-1 term of max_depth 2), events (one ray).
 """
 import warp as wp
 
-from ...device.camera import Camera, generate_ray
+from ...device.camera import Camera, camera_ray
 from ...device.intersect import T_MAX, trace_closest
 from ...device.lights import env_eval, triangle_emission
-from ...device.rng import rng_key, rng_uniform2
 from ...device.scene_device import SceneDevice
-from ...device.types import DIM_FILM, DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_GBUFFER
+from ...device.types import ENV_NONE
 from .params import DIParams
 
 
@@ -21,9 +20,7 @@ def gbuffer_kernel(offset: int, scene: SceneDevice, camera: Camera, params: DIPa
                    gb_dir: wp.array(dtype=wp.vec3), gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
                    events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
-    key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_GBUFFER), wp.uint32(pixel))
-    base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
-    ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, rng_uniform2(key, base + wp.uint32(DIM_FILM)))
+    ray = camera_ray(camera, params.seed, params.frame, pixel, params.sample)
     hit = trace_closest(scene, ray.o, ray.d, T_MAX)
     gb_dir[pixel] = ray.d
     gb_weight[pixel] = ray.weight
