@@ -145,11 +145,17 @@ class ZTestReport:
         # median pixel is.
         self.skew = 0.0 if skew is None else float(np.median(np.abs(np.asarray(skew))))
         self.pixel_conclusive = self.skew <= 1.0
-        self.pixels_inconclusive = 0
+        # Degenerate pixels, also not judged: against a noisy reference, a pixel whose batches
+        # never varied on one side while they did on the other (typically a rare event that one
+        # side never saw in any batch) has no estimate of its own spread, and its Welch z is
+        # meaningless. Such pixels still count in the tile and image means.
+        unjudged = np.zeros(self.pixel_z.shape, bool)
+        if np.any(ref_var > 0):
+            unjudged = (var == 0) != (ref_var == 0)
         if skew is not None:
-            skewed = np.abs(np.broadcast_to(np.asarray(skew, np.float64), self.pixel_z.shape)) > 1.0
-            self.pixels_inconclusive = int(skewed.sum())
-            self.pixel_z = np.where(skewed, 0.0, self.pixel_z)
+            unjudged |= np.abs(np.broadcast_to(np.asarray(skew, np.float64), self.pixel_z.shape)) > 1.0
+        self.pixels_inconclusive = int(unjudged.sum())
+        self.pixel_z = np.where(unjudged, 0.0, self.pixel_z)
         self.tail = float(np.mean(np.abs(self.pixel_z) > self.tail_crit))
         # At most 1% beyond |z| > 3 (0.27% expected); on small images binomial noise alone can
         # exceed 1%, so the limit is at least the 1 - 1e-4 binomial quantile at twice 0.27%.
@@ -185,7 +191,7 @@ class ZTestReport:
                 f"MDB {100 * self.mdb:.3f}%); max|z| tiles {np.abs(self.tile_z).max():.2f} (crit {self.tile_crit:.2f}), "
                 f"pixels {np.abs(self.pixel_z).max():.2f} (crit {self.pixel_crit:.2f}); tail fraction {self.tail:.4f} "
                 f"(limit {self.tail_limit:.4f}); "
-                f"median |skew| {self.skew:.2f} ({self.pixels_inconclusive} skewed pixels not judged), "
+                f"median |skew| {self.skew:.2f} ({self.pixels_inconclusive} skewed or degenerate pixels not judged), "
                 f"excess kurtosis {self.kurtosis:.2f}"
                 f"{'' if self.pixel_conclusive else ' (pixel level inconclusive)'}"
                 f"{' (tail check inconclusive)' if self.pixel_conclusive and not self.tail_conclusive else ''}")

@@ -37,3 +37,20 @@ def test_passing_check_writes_nothing(tmp_path, monkeypatch):
     ref = np.full((16, 16, 3), 0.5)
     rep = assert_matches(Batches(ref, seed=1), ref)
     assert rep.passed and not list(tmp_path.iterdir())
+
+
+def test_degenerate_pixel_is_not_judged():
+    """A rare event that one side never saw in any batch (all batches 0 at a pixel, against a
+    noisy reference there) gives no estimate of that side's spread: the pixel is left to the
+    tile and image levels instead of failing on a meaningless z."""
+    from restir.validation import RGBZTest
+
+    ref = Batches(np.full((16, 16, 3), 0.5), seed=2)
+    est = Batches(np.full((16, 16, 3), 0.5), seed=3)
+    est.batches[:, 3, 3] = 0.0  # never saw the rare light of pixel (3, 3)
+    est.image, est.batch_variance_of_mean = est.batches.mean(0), est.batches.var(0, ddof=1) / est.frames
+    ref.batches[:, 3, 3] = 0.002 * (1 + ref.batches[:, 3, 3])  # rare and small, but seen
+    ref.image, ref.batch_variance_of_mean = ref.batches.mean(0), ref.batches.var(0, ddof=1) / ref.frames
+    rep = RGBZTest(est.image, est.batch_variance_of_mean, ref.image, ref.batch_variance_of_mean, df=31,
+                   batches=est.batches, ref_batches=ref.batches)
+    assert rep.passed and all(r.pixels_inconclusive == 1 for r in rep.reports)
