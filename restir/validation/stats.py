@@ -93,7 +93,8 @@ class ZTestReport:
     """Image, tile and pixel z-tests of one channel of a noisy image against a reference (TESTING.md 5.2).
 
     The family-wise false-failure rate alpha = 1e-3 is split 4e-4 (image), 3e-4 (tiles),
-    3e-4 (pixels) with Bonferroni inside each level. Pixels of a path-traced image are
+    3e-4 (pixels) with Bonferroni inside each level (Holm's step-down procedure rejects some
+    hypothesis exactly when Bonferroni does, so for a pass/fail verdict the two coincide). Pixels of a path-traced image are
     independent, so the image and tile variances are sums of pixel variances.
     """
 
@@ -134,10 +135,15 @@ class ZTestReport:
             tv = tile_v[..., None]
         self.tile_z = self._z(tm - tr, tr, np.sqrt(tv)).ravel()
         self.pixel_z = self._z(mean - ref, ref, np.sqrt(v))
-        # Image and tile means average many independent pixels (normal); pixels use the t
-        # distribution of their variance estimate's degrees of freedom.
-        self.image_crit = z_threshold(0.4 * alpha)
-        self.tile_crit = z_threshold(0.3 * alpha, max(1, self.tile_z.size))
+        # Image and tile variances summed over many independent pixels have many degrees of
+        # freedom (normal quantiles); estimated from B batch means they have B - 1 (t quantiles,
+        # with the fewer batches of the two sides: conservative next to Welch-Satterthwaite).
+        # Pixels use the t distribution of their own variance estimate's degrees of freedom.
+        agg_df = None
+        if agg_var is not None:
+            agg_df = len(batches) - 1 if ref_agg is None else min(len(batches), len(ref_batches)) - 1
+        self.image_crit = z_threshold(0.4 * alpha, 1, agg_df)
+        self.tile_crit = z_threshold(0.3 * alpha, max(1, self.tile_z.size), agg_df)
         self.pixel_crit = z_threshold(0.3 * alpha, self.pixels, df)
         self.tail_crit = 3.0 if df is None else float(sps.t.isf(sps.norm.sf(3.0), df))
         # Skewness guard (TESTING.md 5.2), per pixel: a pixel whose per-batch statistic has
@@ -146,12 +152,12 @@ class ZTestReport:
         self.skew = 0.0 if skew is None else float(np.median(np.abs(np.asarray(skew))))
         self.pixel_conclusive = self.skew <= 1.0
         # Degenerate pixels, also not judged: against a noisy reference, a pixel whose batches
-        # never varied on one side while they did on the other (typically a rare event that one
-        # side never saw in any batch) has no estimate of its own spread, and its Welch z is
-        # meaningless. Such pixels still count in the tile and image means.
+        # never varied on one side (typically a rare event that side never saw, or saw equally
+        # often, in every batch) and whose means differ has no estimate of that side's spread,
+        # and its Welch z is meaningless. Such pixels still count in the tile and image means.
         unjudged = np.zeros(self.pixel_z.shape, bool)
         if np.any(ref_var > 0):
-            unjudged = (var == 0) != (ref_var == 0)
+            unjudged = ((var == 0) | (ref_var == 0)) & (mean != ref)
         if skew is not None:
             unjudged |= np.abs(np.broadcast_to(np.asarray(skew, np.float64), self.pixel_z.shape)) > 1.0
         self.pixels_inconclusive = int(unjudged.sum())
