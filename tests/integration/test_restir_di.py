@@ -159,12 +159,13 @@ def test_bsdf_candidates_need_visibility_aware_reuse(mutation, visibility):
     """Why the combination above is refused, and a power check: BSDF candidates' density omits V,
     so on light points occluded from a pixel its weights sum to N_L p_L / (N_L p_L + N_B p_B) < 1;
     a neighbour that sees such a point inherits the deficit unless targets include V. Under the
-    blinds of the shadow scene the forced combination is about 0.45% dark, |z| ~ 8 at these
-    samples (threshold 3.8); the visibility-aware default passes the same comparison."""
+    blinds of the shadow scene the forced combination is about 0.4% dark, image |z| ~ 9 at
+    these samples (threshold 4.4: t with 31 degrees of freedom); the visibility-aware default
+    passes the same comparison."""
     settings = {"candidates": 1, "candidates.bsdf": 1, "visibility": visibility, "spatial.neighbors": 8,
                 "spatial.rounds": 1, "temporal": False, "debug.mutation": mutation}
-    di = render(shadow_scene(), "restir-di", 128, seed=5, **settings)
-    pt = render(shadow_scene(), "pt", 512, seed=6)
+    di = render(shadow_scene(), "restir-di", 256, seed=5, **settings)
+    pt = render(shadow_scene(), "pt", 1024, seed=6)
     if mutation == "none":
         check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     else:
@@ -334,6 +335,7 @@ def long_run_trend(seeds, frames, batch, size=16, mutation="none"):
 def check_no_trend(means, peaks):
     from scipy import stats as sps
 
+    assert np.all(np.isfinite(means)), "the image diverges to inf or NaN over frames (temporal feedback)"
     per_batch = means.mean(0)
     se = means.std(0, ddof=1) / np.sqrt(means.shape[0])
     x = np.arange(len(per_batch), dtype=float)
