@@ -20,7 +20,7 @@ class IndependentRuns:
     Exposes `image` (mean over runs), `batch_variance_of_mean` (variance of that mean),
     `batch_skewness`, `batch_excess_kurtosis` and `frames` (= runs, for degrees of freedom),
     the interface the z-tests read, and `counters`: the renders' event counters summed over
-    runs (non-finite values, zero-weight candidates, failed shifts, rays).
+    runs (non-finite values, zero-weight candidates, failed shifts).
 
     The harness tests the unbiased build only: a render whose `debug.mutation` setting is not
     "none" (fault injection) is refused unless `allow_mutation` is set (the power checks).
@@ -31,6 +31,10 @@ class IndependentRuns:
             from ..config import ConfigError
 
             raise ConfigError("at least 2 independent runs are needed")
+        mutation = config.settings.get("debug.mutation", "none")
+        if mutation != "none" and not allow_mutation:
+            raise AssertionError(f"debug.mutation={mutation} is a biased fault injection; the harness tests "
+                                 "the unbiased build only")
         sums = None
         self.stats = []
         self.counters: dict[str, int] = {}
@@ -40,10 +44,6 @@ class IndependentRuns:
             cfg.seed = seed0 + k
             r = render(scene, cfg)
             self.stats.append(r.stats)
-            mutation = r.stats["settings"].get("debug.mutation", "none")
-            if mutation != "none" and not allow_mutation:
-                raise AssertionError(f"debug.mutation={mutation} is a biased fault injection; the harness tests "
-                                     "the unbiased build only")
             for name, n in r.stats.get("counters", {}).items():
                 if name.startswith("nonfinite") and n:
                     raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable (TESTING.md 5.1)")

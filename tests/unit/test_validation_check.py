@@ -54,3 +54,15 @@ def test_degenerate_pixel_is_not_judged():
     rep = RGBZTest(est.image, est.batch_variance_of_mean, ref.image, ref.batch_variance_of_mean, df=31,
                    batches=est.batches, ref_batches=ref.batches)
     assert rep.passed and all(r.pixels_inconclusive == 1 for r in rep.reports)
+
+
+def test_harness_refuses_fault_injection():
+    """The harness tests the unbiased build: a debug.mutation setting must be asked for."""
+    import restir
+    from restir.validation import IndependentRuns
+
+    scene = restir.load_scene("builtin:cornell-box")
+    cfg = restir.RenderConfig(method="restir-di", width=8, height=8, settings={"debug.mutation": "drop_empty_neighbors"})
+    with pytest.raises(AssertionError, match="fault injection"):
+        IndependentRuns(scene, cfg, 2)
+    assert IndependentRuns(scene, cfg, 2, allow_mutation=True).counters["nonfinite_weights"] == 0
