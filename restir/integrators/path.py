@@ -172,7 +172,6 @@ def make_path_trace_kernel(several_light_samples: bool):
         res.rays = rays
         return res
 
-
     @wp.kernel
     def path_trace_kernel(
         offset: int,

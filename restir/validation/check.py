@@ -16,19 +16,24 @@ from .stats import RGBZTest
 ZMAP_DIR_ENV = "RESTIR_ZMAP_DIR"  # where failing checks write their z-maps (default out/zmaps)
 
 
-def assert_matches(estimate, reference, reference_var=0.0, *, other=None, tile=8, rel_tol=0.0, abs_tol=0.0,
-                   alpha=1e-3) -> RGBZTest:
+def compare(estimate, reference, reference_var=0.0, *, other=None, tile=8, rel_tol=0.0, abs_tol=0.0,
+            alpha=1e-3) -> RGBZTest:
     """Image, tile and pixel z-tests per channel at family-wise false-failure rate `alpha`
-    (restir/validation/stats.py). Prints the report (with its minimum detectable bias); on
-    failure writes the z-map (see `zmap_path`) and raises AssertionError naming it."""
+    (restir/validation/stats.py), with the skew and kurtosis guards of the worse side."""
     skew, kurt = np.abs(estimate.batch_skewness), estimate.batch_excess_kurtosis
     if other is not None:  # the worse of the two sides decides whether pixel statistics are normal
         skew = np.maximum(skew, np.abs(other.batch_skewness))
         kurt = np.maximum(kurt, other.batch_excess_kurtosis)
-    rep = RGBZTest(estimate.image, estimate.batch_variance_of_mean, reference, reference_var, tile=tile,
-                   alpha=alpha, df=estimate.frames - 1, skew=skew, kurtosis=kurt, rel_tol=rel_tol, abs_tol=abs_tol,
-                   batches=getattr(estimate, "batches", None),
-                   ref_batches=None if other is None else getattr(other, "batches", None))
+    return RGBZTest(estimate.image, estimate.batch_variance_of_mean, reference, reference_var, tile=tile,
+                    alpha=alpha, df=estimate.frames - 1, skew=skew, kurtosis=kurt, rel_tol=rel_tol, abs_tol=abs_tol,
+                    batches=getattr(estimate, "batches", None),
+                    ref_batches=None if other is None else getattr(other, "batches", None))
+
+
+def assert_matches(estimate, reference, reference_var=0.0, **kw) -> RGBZTest:
+    """`compare`, printed (with its minimum detectable bias); on failure writes the z-map (see
+    `zmap_path`) and raises AssertionError naming it."""
+    rep = compare(estimate, reference, reference_var, **kw)
     print(rep)
     if not rep.passed:
         path = zmap_path()

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..api import render
 from ..config import RenderConfig
+from .check import compare
 from .stats import RGBZTest
 
 
@@ -89,9 +90,5 @@ def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, re
     """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2)."""
     tested = IndependentRuns(scene, config, runs, seed0=1000)
     ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000)
-    skew = np.maximum(np.abs(tested.batch_skewness), np.abs(ref.batch_skewness))
-    kurt = np.maximum(tested.batch_excess_kurtosis, ref.batch_excess_kurtosis)
-    rep = RGBZTest(tested.image, tested.batch_variance_of_mean, ref.image, ref.batch_variance_of_mean, tile=tile,
-                   alpha=alpha, df=runs - 1, skew=skew, kurtosis=kurt, batches=tested.batches,
-                   ref_batches=ref.batches)
+    rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
     return Validation(rep, tested, ref)

@@ -1,8 +1,9 @@
 """Stage 1, G-buffer: one primary hit per pixel and its directly visible emission.
 
-Reads: scene, camera (the camera stream shared by every method). Writes: gb_tri, gb_bary, gb_t (hit: rebuilt by surface_at), gb_dir
-(primary ray direction), gb_weight (filter weight), emission (emitted radiance seen directly,
-times the filter weight; the depth-1 term of max_depth 2), events (one ray).
+Reads: scene, camera (the camera stream shared by every method). Writes: gb_tri, gb_bary, gb_t
+(hit: rebuilt by surface_at), gb_dir (primary ray direction), gb_weight (filter weight),
+emission (emitted radiance seen directly, times the filter weight; the depth-1 term of
+max_depth 2), events (one ray).
 """
 import warp as wp
 
