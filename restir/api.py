@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import ConfigError, RenderConfig, method_settings
+from .film import PixelMoments
 from .scene.builtin import builtin_scene
 from .scene.errors import SceneError
 from .scene.scene import Scene, build_scene
@@ -86,23 +87,6 @@ class RenderResult:
         return self.sample_var / max(n - 1, 1)
 
 
-class _PixelMoments:
-    """Combines per-frame (mean, variance) of equal sample counts in float64 (Chan et al.)."""
-
-    def __init__(self, shape):
-        self.n = 0
-        self.mean = np.zeros(shape)
-        self.m2 = np.zeros(shape)
-
-    def add(self, mean, var, count):
-        mean = mean.astype(np.float64)
-        delta = mean - self.mean
-        total = self.n + count
-        self.mean += delta * (count / total)
-        self.m2 += var.astype(np.float64) * count + delta ** 2 * (self.n * count / total)
-        self.n = total
-
-
 def _init_warp():
     import warp as wp
 
@@ -158,7 +142,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
     integ = make_integrator(scene, config)
     setup_ms = (time.perf_counter() - t_setup) * 1e3
     h, w = integ.height, integ.width
-    moments = _PixelMoments((h, w, 3))
+    moments = PixelMoments((h, w, 3))
     frame_sums = np.zeros((4, h, w, 3))
     frames = [] if config.keep_frames else None
     spp = integ.settings["spp"]
@@ -173,29 +157,9 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         if progress:
             progress(f + 1, config.frames)
     total_ms = (time.perf_counter() - t0) * 1e3
-    stage_ms = sum(v for v in integ.timer.ms.values())
-    stats = {
-        "scene": scene.name,
-        "method": config.method,
-        "device": str(integ.device),
-        "width": w,
-        "height": h,
-        "spp_per_frame": spp,
-        "frames": config.frames,
-        "max_depth": integ.settings["max_depth"],
-        "settings": {k: v for k, v in integ.settings.items()},
-        "stages": integ.timer.summary(),
-        "stage_total_ms": stage_ms,
-        "total_ms": total_ms,
-        "setup_ms": setup_ms,
-        "ms_per_frame": stage_ms / config.frames,
-        "rays": integ.rays,
-        "rays_per_second": integ.rays / (stage_ms / 1e3) if stage_ms > 0 else 0.0,
-        "bytes_per_pixel": integ.buffers.per_pixel(w * h),
-        "scene_bytes": integ.dscene.memory_bytes(),
-        "triangles": scene.num_triangles,
-        "tracer": integ.dscene.tracer_used,
-        "counters": dict(integ.counters),
-    }
-    return RenderResult(moments.mean.astype(np.float32), moments.m2 / moments.n, moments.n, stats, frame_sums,
+    stats = {"scene": scene.name, "method": config.method, "width": w, "height": h, "spp_per_frame": spp,
+             "frames": config.frames, **integ.stats(), "total_ms": total_ms, "setup_ms": setup_ms,
+             "triangles": scene.num_triangles}
+    stats["ms_per_frame"] = stats["stage_total_ms"] / config.frames
+    return RenderResult(moments.mean.astype(np.float32), moments.variance, moments.n, stats, frame_sums,
                         np.stack(frames) if frames is not None else None)

@@ -8,7 +8,8 @@ import warp as wp
 
 from .rng import rng_key, rng_uniform2
 from .sampling import sample_cdf, sample_tent
-from .types import FILTER_BOX, FILTER_TENT, STAGE_CAMERA
+from .streams import STAGE_CAMERA
+from .types import FILTER_BOX, FILTER_TENT
 
 
 @wp.struct

@@ -7,6 +7,7 @@ import warp as wp
 
 from .native_trace import native_closest_hit, native_occluded
 from .scene_device import SceneDevice
+from .types import NO_TRIANGLE
 
 # Mitsuba: RayEpsilon = 1500 * 2^-24, ShadowEpsilon = 10 * RayEpsilon.
 RAY_EPSILON = wp.constant(8.940696716308594e-05)
@@ -65,7 +66,7 @@ def trace_closest(scene: SceneDevice, o: wp.vec3, d: wp.vec3, t_max: float) -> S
         h = SurfaceHit()
         h.valid = 0
         h.t = T_MAX
-        h.tri = -1
+        h.tri = NO_TRIANGLE
         return h
     return surface_at(scene, int(q[3]), q[1], q[2], q[0])
 
@@ -74,3 +75,18 @@ def trace_closest(scene: SceneDevice, o: wp.vec3, d: wp.vec3, t_max: float) -> S
 def is_visible(scene: SceneDevice, o: wp.vec3, d: wp.vec3, dist: float) -> bool:
     """True if nothing blocks the unit direction d from o over (0, dist); stops short of the end."""
     return not native_occluded(scene.mesh, scene.embree_scene, scene.embree_occluded, o, d, dist * (1.0 - SHADOW_EPSILON))
+
+
+@wp.func
+def visible_to_light(scene: SceneDevice, p: wp.vec3, ng: wp.vec3, wi: wp.vec3, light_p: wp.vec3, light_n: wp.vec3,
+                     is_env: int) -> bool:
+    """The one shadow ray of every light connection: from surface point p (geometric normal ng)
+    along unit direction wi to the light point light_p (normal light_n), or to the environment.
+    Both ends are offset off their surfaces, so neither surface occludes its own connection."""
+    origin = offset_origin(p, ng, wi)
+    if is_env != 0:
+        return is_visible(scene, origin, wi, T_MAX)
+    target = offset_origin(light_p, light_n, -wi)
+    seg = target - origin
+    dist = wp.length(seg)
+    return dist > 0.0 and is_visible(scene, origin, seg / dist, dist)

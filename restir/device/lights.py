@@ -8,7 +8,7 @@ import warp as wp
 
 from .sampling import sample_alias, sample_cdf, square_to_uniform_sphere, square_to_uniform_triangle
 from .scene_device import SceneDevice
-from .types import ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, PI
+from .types import ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, LIGHT_ENV, PI
 
 
 @wp.struct
@@ -18,7 +18,7 @@ class LightSample:
     p: wp.vec3       # light point (surface lights)
     n: wp.vec3       # geometric normal at the light point
     ns: wp.vec3      # shading normal at the light point (decides the emitting side)
-    tri: int         # emissive triangle, -1 for the environment
+    tri: int         # emissive triangle, LIGHT_ENV for the environment
     Le: wp.vec3      # emitted radiance toward the shading point
     pdf: float       # solid-angle density, selection probability included; 0 = failed
     is_env: int
@@ -107,7 +107,7 @@ def env_pdf(scene: SceneDevice, d_world: wp.vec3) -> float:
 def sample_env(scene: SceneDevice, u: wp.vec2) -> LightSample:
     ls = LightSample()
     ls.is_env = 1
-    ls.tri = -1
+    ls.tri = LIGHT_ENV
     ls.dist = 1.0e30
     ls.pdf = 0.0
     if scene.env_kind == ENV_CONSTANT:

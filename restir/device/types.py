@@ -30,25 +30,12 @@ STRATEGY_MIS = wp.constant(0)
 STRATEGY_NEE = wp.constant(1)
 STRATEGY_BSDF = wp.constant(2)
 
-# Random-stream stage ids: no two stages share a stream.
-STAGE_CAMERA = wp.constant(0)      # camera rays of every method (common random numbers)
-STAGE_PATH_TRACE = wp.constant(1)
-STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (j < 256)
-STAGE_DI_INITIAL = wp.constant(11)
-STAGE_DI_SHADE = wp.constant(12)
-STAGE_DI_TEMPORAL = wp.constant(13)
-STAGE_DI_SPATIAL = wp.constant(20)  # + round index
-
-# Random dimensions within one sample: DIMS_PER_BOUNCE numbers per bounce.
-DIMS_PER_BOUNCE = wp.constant(8)
-DIMS_PER_SAMPLE = wp.constant(8 * 1024)
-# Offsets of each use inside a bounce (slots 0 and 1 are free: camera rays use STAGE_CAMERA).
-DIM_LIGHT_SELECT = wp.constant(2)  # 1 number
-DIM_LIGHT_POINT = wp.constant(3)   # 2 numbers
-DIM_BSDF_LOBE = wp.constant(5)     # 1 number
-DIM_BSDF_DIR = wp.constant(6)      # 2 numbers
-
 PI = wp.constant(3.14159265358979323846)
 INV_PI = wp.constant(0.31830988618379067154)
 INV_TWO_PI = wp.constant(0.15915494309189533577)
 INV_FOUR_PI = wp.constant(0.07957747154594766788)
+
+# Light-sample identities (a light sample's `tri` field, and reservoirs that store one).
+LIGHT_ENV = wp.constant(-1)    # a direction toward the environment
+LIGHT_NONE = wp.constant(-2)   # no sample (a reservoir that selected nothing)
+NO_TRIANGLE = wp.constant(-1)  # a ray that hit nothing

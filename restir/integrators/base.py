@@ -1,8 +1,19 @@
-"""Integrator protocol: allocate buffers once, then render frames; stages are timed by name."""
+"""The Integrator base: everything a method shares besides its stages.
+
+- allocation of named, registered buffers (memory stats per buffer),
+- the stage runner: one timed launch per stage, its per-pixel events summed into counters,
+- the camera of a frame (scripted motion),
+- the stats of a render, read through `stats()` (the API never reads integrator internals).
+
+A method lists its STAGES and KERNELS, implements `allocate` and `render_frame` (a flat table of
+contents of stage calls) and returns each frame's per-pixel mean and variance.
+"""
 import numpy as np
 import warp as wp
 
+from ..parallel import launch_pixels
 from ..timing import BufferRegistry, StageTimer
+from .common.events import COUNTER_NAMES, EV_RAYS
 
 
 class Integrator:
@@ -27,9 +38,15 @@ class Integrator:
         self.rays = 0
         self.reverse_launch = False  # debug: slices in reverse order (see parallel.launch_pixels)
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
+        self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
+        self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into counters
         self.allocate()
-        for k in self.KERNELS:
+        for k in self.kernels():
             wp.load_module(k.module, device=self.device)
+
+    def kernels(self) -> tuple:
+        """The kernels this configuration launches (compiled before the first frame)."""
+        return self.KERNELS
 
     def camera(self, frame: int):
         """The device camera of `frame` (scripted motion from the settings, if any)."""
@@ -47,8 +64,36 @@ class Integrator:
         self.buffers.add(name, a)
         return a
 
-    def count(self, name: str, per_pixel) -> None:
-        self.counters[name] = self.counters.get(name, 0) + int(per_pixel.numpy().sum(dtype=np.int64))
+    def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights") -> None:
+        """Launch one stage over the pixels, timed. Every stage kernel takes `events` (one vec4i per
+        pixel, common/events.py) as its last output; they are summed into the counters here,
+        non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
+        stages that write radiance)."""
+        with self.timer.stage(stage):
+            launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
+                          self.reverse_launch)
+        ev = self.events.numpy().sum(axis=0, dtype=np.int64)
+        for i, name in enumerate((nonfinite,) + COUNTER_NAMES[1:]):
+            self.counters[name] = self.counters.get(name, 0) + int(ev[i])
+        self.rays += int(ev[EV_RAYS])
+
+    def stats(self) -> dict:
+        """What the method reports about the frames rendered so far (the API adds wall times)."""
+        stage_ms = sum(self.timer.ms.values())
+        return {
+            "device": str(self.device),
+            "max_depth": self.settings["max_depth"],
+            "settings": dict(self.settings),
+            "stages": self.timer.summary(),
+            "stage_total_ms": stage_ms,
+            "rays": self.rays,
+            "rays_per_second": self.rays / (stage_ms / 1e3) if stage_ms > 0 else 0.0,
+            "bytes_per_pixel": self.buffers.per_pixel(self.num_pixels),
+            "scene_bytes": self.dscene.memory_bytes(),
+            "tracer": self.dscene.tracer_used,
+            "counters": dict(self.counters),
+            "notes": list(self.notes),
+        }
 
     def allocate(self) -> None:
         raise NotImplementedError

@@ -11,25 +11,28 @@ samples are taken at every vertex (Mitsuba's `direct` integrator calls them emit
 with MIS they are combined with the one BSDF sample by the balance heuristic over
 N p_light + p_bsdf. Sample 0 uses the path's own stream; sample j > 0 the stream of stage
 STAGE_PATH_NEE + j, so images with one light sample do not change.
+The path's steps (light connection, emission MIS weight, scattering, Russian roulette) are the
+device functions of device/path_steps.py, which ReSTIR PT's base path and replay also call.
 """
 import numpy as np
 import warp as wp
 
-from ..device.bsdf import Material, bsdf_eval, bsdf_is_delta_only, bsdf_pdf, bsdf_sample
+from ..device.bsdf import bsdf_is_delta_only
 from ..device.camera import Camera, camera_ray
-from ..device.intersect import T_MAX, SurfaceHit, is_visible, offset_origin, trace_closest
-from ..device.lights import env_eval, env_pdf, sample_light, triangle_emission, triangle_light_pdf
+from ..device.color import max3
+from ..device.intersect import T_MAX, trace_closest
+from ..device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
+from ..device.path_steps import connect_to_light, emission_mis_weight, rr_survival_probability, scatter
 from ..device.rng import rng_key, rng_uniform, rng_uniform2
-from ..device.sampling import Frame, frame_from_normal, to_local, to_world
+from ..device.sampling import frame_from_normal, to_local
 from ..device.scene_device import SceneDevice, material_at
-from ..device.types import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT,
-                            DIMS_PER_BOUNCE, DIMS_PER_SAMPLE, ENV_NONE, STAGE_PATH_NEE, STAGE_PATH_TRACE, STRATEGY_BSDF,
-                            STRATEGY_MIS, STRATEGY_NEE)
-from ..parallel import launch_pixels
+from ..device.streams import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIM_RR, DIMS_PER_BOUNCE,
+                              DIMS_PER_SAMPLE, MAX_NEE_SAMPLES, MAX_SEGMENTS, STAGE_PATH_NEE, STAGE_PATH_TRACE)
+from ..device.types import ENV_NONE, STRATEGY_BSDF, STRATEGY_MIS, STRATEGY_NEE
+from ..film import Welford, welford_add
 from .base import Integrator
+from .common.events import output_events
 
-MAX_SEGMENTS = 1023  # DIMS_PER_SAMPLE / DIMS_PER_BOUNCE - 1: random streams of samples never overlap
-MAX_NEE_SAMPLES = 256  # extra light samples' streams are stage ids STAGE_PATH_NEE + 1 .. + 255
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
 
@@ -46,21 +49,6 @@ class PTParams:
     nee_samples: int   # light samples per vertex, N
 
 
-@wp.func
-def emission_weight(params: PTParams, prev_delta: int, p_bsdf: float, p_light: float) -> float:
-    """Weight of emission found by BSDF sampling (camera rays and delta bounces count as delta)."""
-    if prev_delta != 0 or params.strategy == STRATEGY_BSDF:
-        return 1.0
-    if params.strategy == STRATEGY_NEE:
-        return 0.0
-    return p_bsdf / (p_bsdf + float(params.nee_samples) * p_light)
-
-
-@wp.func
-def max3(v: wp.vec3) -> float:
-    return wp.max(wp.max(v[0], v[1]), v[2])
-
-
 @wp.struct
 class PathResult:
     L: wp.vec3
@@ -74,35 +62,6 @@ def make_path_trace_kernel(several_light_samples: bool):
     time even when it runs no iteration (measured at 192x192, 8 spp, Cornell box), so the
     default kernel is built without it.
     """
-
-    @wp.func
-    def light_sample_contribution(scene: SceneDevice, params: PTParams, hit: SurfaceHit, mat: Material, frame: Frame,
-                                  wi: wp.vec3, key: wp.uint32, dim: wp.uint32) -> wp.vec4:
-        """One of the N light samples at a vertex: (f Le V / (N p_L [+ p_B with MIS]), shadow rays traced)."""
-        out = wp.vec4(0.0)
-        ls = sample_light(scene, hit.p, rng_uniform(key, dim + wp.uint32(DIM_LIGHT_SELECT)),
-                          rng_uniform2(key, dim + wp.uint32(DIM_LIGHT_POINT)))
-        if ls.pdf > 0.0 and max3(ls.Le) > 0.0:
-            wo = to_local(frame, ls.wi)
-            f = bsdf_eval(mat, wi, wo)
-            if max3(f) > 0.0:
-                origin = offset_origin(hit.p, hit.ng, ls.wi)
-                vis = bool(False)
-                if ls.is_env != 0:
-                    vis = is_visible(scene, origin, ls.wi, T_MAX)
-                else:
-                    target = offset_origin(ls.p, ls.n, -ls.wi)
-                    seg = target - origin
-                    dist = wp.length(seg)
-                    vis = dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
-                out = wp.vec4(0.0, 0.0, 0.0, 1.0)
-                if vis:
-                    p_sum = float(params.nee_samples) * ls.pdf
-                    if params.strategy == STRATEGY_MIS:
-                        p_sum += bsdf_pdf(mat, wi, wo)
-                    c = wp.cw_mul(f, ls.Le) / p_sum
-                    out = wp.vec4(c[0], c[1], c[2], 1.0)
-        return out
 
     @wp.func
     def path_radiance(scene: SceneDevice, params: PTParams, o_in: wp.vec3, d_in: wp.vec3, pixel: wp.uint32, key: wp.uint32,
@@ -124,13 +83,14 @@ def make_path_trace_kernel(several_light_samples: bool):
             # ---- escaped: environment emission
             if hit.valid == 0:
                 if scene.env_kind != ENV_NONE and visible_emitter:
-                    w = emission_weight(params, prev_delta, prev_pdf, env_pdf(scene, d))
+                    w = emission_mis_weight(prev_delta, prev_pdf, env_pdf(scene, d), params.nee_samples, params.strategy)
                     L += wp.cw_mul(beta, env_eval(scene, d)) * w
                 break
             # ---- emission found by BSDF sampling (or seen directly)
             Le = triangle_emission(scene, hit.tri, hit.ns, -d)
             if max3(Le) > 0.0 and visible_emitter:
-                w = emission_weight(params, prev_delta, prev_pdf, triangle_light_pdf(scene, hit.tri, hit.ng, d, hit.t))
+                w = emission_mis_weight(prev_delta, prev_pdf, triangle_light_pdf(scene, hit.tri, hit.ng, d, hit.t),
+                                        params.nee_samples, params.strategy)
                 L += wp.cw_mul(beta, Le) * w
             if depth + 1 >= max_depth:
                 break
@@ -140,31 +100,39 @@ def make_path_trace_kernel(several_light_samples: bool):
             dim = base + wp.uint32((depth + 1) * DIMS_PER_BOUNCE)
             # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B)
             if params.strategy != STRATEGY_BSDF and bsdf_is_delta_only(mat) == 0:
-                nee = light_sample_contribution(scene, params, hit, mat, frame, wi, key, dim)
+                c = connect_to_light(scene, hit, mat, frame, wi, rng_uniform(key, dim + wp.uint32(DIM_LIGHT_SELECT)),
+                                     rng_uniform2(key, dim + wp.uint32(DIM_LIGHT_POINT)), params.nee_samples,
+                                     params.strategy)
+                nee = c.L
+                rays += c.rays
                 if wp.static(several_light_samples):
                     for j in range(1, params.nee_samples):
                         key_j = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_NEE + j), pixel)
-                        nee += light_sample_contribution(scene, params, hit, mat, frame, wi, key_j, dim)
-                L += wp.cw_mul(beta, wp.vec3(nee[0], nee[1], nee[2]))
-                rays += int(nee[3])
+                        cj = connect_to_light(scene, hit, mat, frame, wi,
+                                              rng_uniform(key_j, dim + wp.uint32(DIM_LIGHT_SELECT)),
+                                              rng_uniform2(key_j, dim + wp.uint32(DIM_LIGHT_POINT)),
+                                              params.nee_samples, params.strategy)
+                        nee += cj.L
+                        rays += cj.rays
+                L += wp.cw_mul(beta, nee)
             # ---- BSDF sampling
-            bs = bsdf_sample(mat, wi, rng_uniform(key, dim + wp.uint32(DIM_BSDF_LOBE)),
-                             rng_uniform2(key, dim + wp.uint32(DIM_BSDF_DIR)))
-            if bs.valid == 0:
+            sc = scatter(hit, mat, frame, wi, rng_uniform(key, dim + wp.uint32(DIM_BSDF_LOBE)),
+                         rng_uniform2(key, dim + wp.uint32(DIM_BSDF_DIR)))
+            if sc.valid == 0:
                 break
-            beta = wp.cw_mul(beta, bs.weight)
+            beta = wp.cw_mul(beta, sc.bs.weight)
             if max3(beta) <= 0.0:
                 break
-            d = wp.normalize(to_world(frame, bs.wo))
-            o = offset_origin(hit.p, hit.ng, d)
-            prev_pdf = bs.pdf
-            prev_delta = bs.is_delta
-            eta = eta * bs.eta
+            d = sc.d
+            o = sc.o
+            prev_pdf = sc.bs.pdf
+            prev_delta = sc.bs.is_delta
+            eta = eta * sc.bs.eta
             depth += 1
             # ---- Russian roulette (Mitsuba's rule; off by default)
             if params.use_rr != 0 and depth >= params.rr_depth:
-                q = wp.min(max3(beta) * eta * eta, 0.95)
-                if rng_uniform(key, dim + wp.uint32(DIMS_PER_BOUNCE - 1)) >= q:
+                q = rr_survival_probability(beta, eta)
+                if rng_uniform(key, dim + wp.uint32(DIM_RR)) >= q:
                     break
                 beta = beta / q
         res = PathResult()
@@ -180,25 +148,21 @@ def make_path_trace_kernel(several_light_samples: bool):
         params: PTParams,
         frame_mean: wp.array(dtype=wp.vec3),
         frame_var: wp.array(dtype=wp.vec3),
-        frame_rays: wp.array(dtype=wp.int32),
+        events: wp.array(dtype=wp.vec4i),
     ):
         pixel = wp.tid() + offset
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
-        mean = wp.vec3(0.0)
-        m2 = wp.vec3(0.0)
+        acc = Welford()
         rays = int(0)
         for s in range(params.spp):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
             ray = camera_ray(camera, params.seed, params.frame, pixel, s)
             res = path_radiance(scene, params, ray.o, ray.d, wp.uint32(pixel), key, base)
-            L = res.L * ray.weight
             rays += res.rays
-            delta = L - mean
-            mean += delta / float(s + 1)
-            m2 += wp.cw_mul(delta, L - mean)
-        frame_mean[pixel] = mean
-        frame_var[pixel] = m2 / float(params.spp)
-        frame_rays[pixel] = rays
+            acc = welford_add(acc, res.L * ray.weight)
+        frame_mean[pixel] = acc.mean
+        frame_var[pixel] = acc.m2 / float(params.spp)
+        events[pixel] = output_events(acc.mean, rays)
 
     return path_trace_kernel
 
@@ -225,7 +189,6 @@ class PathTracer(Integrator):
     def allocate(self) -> None:
         self.frame_mean = self.buffer("frame_mean", wp.vec3)
         self.frame_var = self.buffer("frame_var", wp.vec3)
-        self.frame_rays = self.buffer("frame_rays", wp.int32)
 
     def params(self, frame: int) -> PTParams:
         s = self.settings
@@ -242,12 +205,8 @@ class PathTracer(Integrator):
         return p
 
     def render_frame(self, frame: int):
-        with self.timer.stage("path_trace"):
-            kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
-            launch_pixels(kernel, self.num_pixels,
-                          inputs=[self.dscene.scene, self.camera(frame), self.params(frame)],
-                          outputs=[self.frame_mean, self.frame_var, self.frame_rays], device=self.device, slices=self.slices,
-                          reverse=self.reverse_launch)
-        self.rays += int(self.frame_rays.numpy().sum(dtype=np.int64))
+        kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
+        self.run_stage("path_trace", kernel, [self.dscene.scene, self.camera(frame), self.params(frame)],
+                       [self.frame_mean, self.frame_var], nonfinite="nonfinite_outputs")
         shape = (self.height, self.width, 3)
         return self.frame_mean.numpy().reshape(shape), self.frame_var.numpy().reshape(shape)

@@ -55,6 +55,62 @@ def pairwise_canonical_term(d_c: float, d_i: float, k: int) -> float:
     return a / (d_i + a)
 
 
+@wp.struct
+class PairwiseMIS:
+    """Pairwise MIS over a canonical input and neighbours, accumulated as the pass streams them.
+
+    k: the configured neighbour count (fixed before sampling; enters every weight); V: the
+    neighbours valid by geometry so far; m_c: the canonical input's weight 1 + sum of its shares;
+    m_i: the weight of the neighbour added last. The pass finalises with normalization V + 1
+    (`pairwise_normalization`), after which the weights of every technique at any y sum to 1.
+    """
+    k: int
+    V: int
+    m_c: float
+    m_i: float
+
+
+@wp.func
+def pairwise_init(k: int) -> PairwiseMIS:
+    acc = PairwiseMIS()
+    acc.k = k
+    acc.V = 0
+    acc.m_c = 1.0
+    acc.m_i = 0.0
+    return acc
+
+
+@wp.func
+def pairwise_add_neighbor(acc: PairwiseMIS, d_i_at_y: float, d_c_at_y: float, d_c_at_xc: float,
+                          d_i_at_xc: float) -> PairwiseMIS:
+    """Add one neighbour i that is valid by geometry (whatever its reservoir holds).
+
+    y = T_{i->c}(x_i) is its sample in the canonical domain: d_i_at_y = p_hat_i(x_i) / J_{i->c} * M_i,
+    d_c_at_y = p_hat_c(y) * M_c. x_c is the canonical sample: d_c_at_xc = p_hat_c(x_c) * M_c,
+    d_i_at_xc = p_hat_i(T_{c->i}(x_c)) * J_{c->i} * M_i (0 when that shift fails).
+    Returns the accumulator with V + 1, the canonical share added, and m_i set.
+    """
+    out = acc
+    out.V = acc.V + 1
+    out.m_i = pairwise_neighbor_weight(d_i_at_y, d_c_at_y, acc.k)
+    out.m_c = acc.m_c + pairwise_canonical_term(d_c_at_xc, d_i_at_xc, acc.k)
+    return out
+
+
+@wp.func
+def pairwise_normalization(acc: PairwiseMIS) -> float:
+    return float(acc.V + 1)
+
+
+@wp.func
+def talbot_weight2(d_0: float, d_1: float, i: int) -> float:
+    """Generalized balance (Talbot) weight of technique i of two: d_i / (d_0 + d_1); 0 when both are 0."""
+    total = d_0 + d_1
+    if total <= 0.0:
+        return 0.0
+    return wp.where(i == 0, d_0, d_1) / total
+
+
 @wp.func
 def constant_binary_weight(d: techniques_vec, M: techniques_vec, n: int, i: int) -> float:
     total = float(0.0)

@@ -64,12 +64,43 @@ def ris_stream(s: RisState, w: float, p_hat: float, M: float, index: int, u: flo
 
 
 @wp.func
+def ris_merge(s: RisState, m: float, p_hat: float, J: float, W: float, M: float, index: int, u: float) -> RisState:
+    """Stream one reservoir of another domain (or this one) with its generalized RIS weight
+    w = m * p_hat * J * W (Lin et al. 2022, GRIS): m its MIS weight, p_hat the target of its
+    sample shifted into this domain, J the shift's Jacobian (1 for the identity shift and for
+    the canonical input), W its unbiased contribution weight, M its confidence. A failed shift
+    passes J = 0 (or p_hat = 0): the input still counts with its M and is never selected."""
+    return ris_stream(s, m * p_hat * J * W, p_hat, M, index, u)
+
+
+@wp.func
 def ris_contribution_weight(s: RisState, normalization: float) -> float:
     """W = w_sum / (p_hat(y) * normalization); 0 when nothing was selected. A non-finite W is
     returned as it is (never silently zeroed): it surfaces in the stages' non-finite counters."""
     if s.selected < 0 or s.p_hat <= 0.0 or normalization <= 0.0:
         return 0.0
     return s.w_sum / (s.p_hat * normalization)
+
+
+@wp.struct
+class ReservoirWeights:
+    """What finalisation gives a stored reservoir besides its sample: W, M and whether a sample
+    was selected at all (a reservoir with none keeps its confidence M and has W = 0)."""
+    W: float
+    M: float
+    selected: int
+
+
+@wp.func
+def ris_finalize(s: RisState, normalization: float) -> ReservoirWeights:
+    """The end of a resampling pass: W = w_sum / (p_hat(y) * normalization) and M = the summed
+    confidences. Each stored reservoir type has one `store` function that copies the selected
+    sample and these weights; nothing else writes W or M."""
+    f = ReservoirWeights()
+    f.W = ris_contribution_weight(s, normalization)
+    f.M = s.M
+    f.selected = wp.where(s.selected >= 0, 1, 0)
+    return f
 
 
 @wp.func

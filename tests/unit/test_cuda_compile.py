@@ -6,7 +6,7 @@ import warp as wp
 
 KERNEL_MODULES = [
     "restir.integrators.path",
-    "restir.integrators.restir_di.s1_gbuffer",
+    "restir.integrators.common.primary_hits",
     "restir.integrators.restir_di.s2_initial",
     "restir.integrators.restir_di.s3_visibility",
     "restir.integrators.restir_di.s4_temporal",

@@ -15,6 +15,3 @@ class DIParams:
     spatial_round: int   # index of the spatial round being run
     spatial_k: int       # configured neighbour count (enters the pairwise weights)
     spatial_radius: float  # neighbour search radius in pixels
-    mut_drop_empty: int  # mutation A3 (tests only): exclude empty neighbours from k
-    mut_skip_zero_canonical: int  # mutation A1 (tests only): no reuse when the canonical is 0
-    mut_temporal_overweight: int  # mutation (tests only): the history's weight x1.5, a feedback loop

@@ -12,11 +12,14 @@ targets are visibility-aware (setting `visibility = reuse`; see docs/restir_di.m
 import warp as wp
 
 from ...device.bsdf import bsdf_eval, bsdf_pdf
-from ...device.intersect import SurfaceHit, T_MAX, is_visible, offset_origin
+from ...device.color import luminance
+from ...device.intersect import SurfaceHit, T_MAX, visible_to_light
 from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.sampling import to_local
 from ...device.scene_device import SceneDevice
-from .gbuffer import Shading
+from ...device.types import LIGHT_ENV, LIGHT_NONE
+from ...resampling.ris import ReservoirWeights
+from ..common.shading import Shading
 
 
 @wp.struct
@@ -24,7 +27,7 @@ class DIReservoir:
     light_y: wp.vec3    # point on the light, or unit direction toward the environment
     light_n: wp.vec3    # geometric normal of the light triangle (area measure)
     light_ns: wp.vec3   # shading normal there (decides the emitting side)
-    light_tri: int      # emissive triangle, -1: environment, -2: no sample
+    light_tri: int      # emissive triangle, LIGHT_ENV: environment, LIGHT_NONE: no sample
     W: float            # unbiased contribution weight, in the sample's measure
     M: float            # confidence
 
@@ -32,21 +35,28 @@ class DIReservoir:
 @wp.func
 def empty_reservoir() -> DIReservoir:
     r = DIReservoir()
-    r.light_tri = -2
+    r.light_tri = LIGHT_NONE
     r.W = 0.0
     r.M = 0.0
     return r
 
 
 @wp.func
-def luminance(c: wp.vec3) -> float:
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+def store(chosen: DIReservoir, f: ReservoirWeights) -> DIReservoir:
+    """The stored result of a resampling pass: the chosen input's sample with the pass's W and M
+    (the one field copy of every DI stage); with nothing selected, no sample but the confidence."""
+    r = chosen
+    r.W = f.W
+    r.M = f.M
+    if f.selected == 0:
+        r.light_tri = LIGHT_NONE
+    return r
 
 
 @wp.func
 def direction_to_light(r: DIReservoir, x: wp.vec3) -> wp.vec4:
     """(unit direction x -> y, distance); distance T_MAX for the environment."""
-    if r.light_tri == -1:
+    if r.light_tri == LIGHT_ENV:
         return wp.vec4(r.light_y[0], r.light_y[1], r.light_y[2], T_MAX)
     d = r.light_y - x
     dist = wp.length(d)
@@ -59,7 +69,7 @@ def direction_to_light(r: DIReservoir, x: wp.vec3) -> wp.vec4:
 @wp.func
 def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> wp.vec3:
     """f_s * Le * G at the primary hit sh (no visibility); 0 for no sample."""
-    if r.light_tri == -2:
+    if r.light_tri == LIGHT_NONE:
         return wp.vec3(0.0)
     dd = direction_to_light(r, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])
@@ -67,7 +77,7 @@ def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> 
         return wp.vec3(0.0)
     Le = wp.vec3(0.0)
     G = float(1.0)
-    if r.light_tri == -1:
+    if r.light_tri == LIGHT_ENV:
         Le = env_eval(scene, d)
     else:
         Le = triangle_emission(scene, r.light_tri, r.light_ns, -d)
@@ -79,14 +89,8 @@ def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> 
 @wp.func
 def light_visible(scene: SceneDevice, hit: SurfaceHit, r: DIReservoir) -> bool:
     dd = direction_to_light(r, hit.p)
-    d = wp.vec3(dd[0], dd[1], dd[2])
-    origin = offset_origin(hit.p, hit.ng, d)
-    if r.light_tri == -1:
-        return is_visible(scene, origin, d, T_MAX)
-    target = offset_origin(r.light_y, r.light_n, -d)
-    seg = target - origin
-    dist = wp.length(seg)
-    return dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
+    is_env = wp.where(r.light_tri == LIGHT_ENV, 1, 0)
+    return visible_to_light(scene, hit.p, hit.ng, wp.vec3(dd[0], dd[1], dd[2]), r.light_y, r.light_n, is_env)
 
 
 @wp.func
@@ -126,11 +130,11 @@ def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bs
     p_B omits V(x, y); why that is sound only with visibility-aware reuse: docs/restir_di.md."""
     dd = direction_to_light(r, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])
-    if r.light_tri == -2 or dd[3] <= 0.0:
+    if r.light_tri == LIGHT_NONE or dd[3] <= 0.0:
         return wp.vec2(0.0, 0.0)
     p_L = float(0.0)
     to_measure = float(1.0)  # solid angle -> y's measure
-    if r.light_tri == -1:
+    if r.light_tri == LIGHT_ENV:
         p_L = env_pdf(scene, d)
     else:
         p_L = (1.0 - scene.env_select_prob) * scene.tri_light_pdf[r.light_tri]

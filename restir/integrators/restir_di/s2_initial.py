@@ -11,22 +11,26 @@ is weighted by the balance heuristic over both generators:
 with p_hat = luminance(f_s Le G) (unshadowed: visibility is the next stage's job). A BSDF
 sample that picks a delta lobe, misses every emitter or fails is a candidate of weight 0.
 Delta-only surfaces and misses keep an empty reservoir.
-Reads: scene, G-buffer. Writes: reservoirs, events (non-finite and zero weights, rays).
+Reads: scene, G-buffer (gb). Writes: reservoirs, events (non-finite and zero weights, rays).
 """
 import warp as wp
 
 from ...device.bsdf import bsdf_is_delta_only, bsdf_sample
+from ...device.color import luminance
 from ...device.intersect import T_MAX, offset_origin, trace_closest
 from ...device.lights import sample_light
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
 from ...device.sampling import to_world
 from ...device.scene_device import SceneDevice
-from ...device.types import DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_INITIAL
-from ...resampling.ris import ris_contribution_weight, ris_init, ris_stream
-from .events import stage_events
-from .gbuffer import Shading, load_shading
+from ...device.streams import (DI_DIM_CANDIDATE_POINT, DI_DIM_CANDIDATE_RIS, DI_DIM_CANDIDATE_SELECT,
+                               DI_DIMS_PER_CANDIDATE, DIMS_PER_SAMPLE, STAGE_DI_INITIAL)
+from ...device.types import ENV_NONE, LIGHT_ENV
+from ...resampling.ris import ris_finalize, ris_init, ris_stream
+from ..common.events import stage_events
+from ..common.gbuffer import GBuffer
+from ..common.shading import Shading, load_shading
 from .params import DIParams
-from .reservoir import DIReservoir, candidate_densities, empty_reservoir, luminance, unshadowed_contribution
+from .reservoir import DIReservoir, candidate_densities, empty_reservoir, store, unshadowed_contribution
 
 
 @wp.func
@@ -57,7 +61,7 @@ def bsdf_direction(sh: Shading, u_lobe: float, u: wp.vec2) -> wp.vec4:
 
 @wp.func
 def light_point_along(scene: SceneDevice, sh: Shading, d: wp.vec3) -> DIReservoir:
-    """The light point the ray from sh along d reaches first (no sample: light_tri = -2)."""
+    """The light point the ray from sh along d reaches first (no sample: light_tri = LIGHT_NONE)."""
     cand = empty_reservoir()
     h = trace_closest(scene, offset_origin(sh.hit.p, sh.hit.ng, d), d, T_MAX)
     if h.valid != 0:
@@ -67,29 +71,28 @@ def light_point_along(scene: SceneDevice, sh: Shading, d: wp.vec3) -> DIReservoi
             cand.light_n = h.ng
             cand.light_ns = h.ns
     elif scene.env_kind != ENV_NONE:
-        cand.light_tri = -1
+        cand.light_tri = LIGHT_ENV
         cand.light_y = d
     return cand
 
 
 @wp.kernel
-def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
-                   gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
+def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
                    reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     out = empty_reservoir()
     s = ris_init()
     rays = int(0)
-    sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+    sh = load_shading(scene, gb, pixel)
     if sh.valid != 0 and bsdf_is_delta_only(sh.mat) == 0:
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
         n_L = float(params.candidates)
         n_B = float(params.bsdf_candidates)
         for j in range(params.candidates + params.bsdf_candidates):
-            dim = base + wp.uint32(4 * j)
-            u_sel = rng_uniform(key, dim)
-            u = rng_uniform2(key, dim + wp.uint32(1))
+            dim = base + wp.uint32(j * DI_DIMS_PER_CANDIDATE)
+            u_sel = rng_uniform(key, dim + wp.uint32(DI_DIM_CANDIDATE_SELECT))
+            u = rng_uniform2(key, dim + wp.uint32(DI_DIM_CANDIDATE_POINT))
             cand = empty_reservoir()
             if j < params.candidates:
                 cand = light_candidate(scene, sh, u_sel, u)
@@ -106,13 +109,11 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp
             if p_source > 0.0:
                 p_hat = luminance(unshadowed_contribution(scene, sh, cand))
                 w = p_hat / p_source
-            s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(3)))
+            s = ris_stream(s, w, p_hat, 0.0, j, rng_uniform(key, dim + wp.uint32(DI_DIM_CANDIDATE_RIS)))
             if s.selected == j:
                 out = cand
-        out.W = ris_contribution_weight(s, 1.0)
-        out.M = 1.0
-        if out.W <= 0.0:
-            out = empty_reservoir()
-            out.M = 1.0
+        f = ris_finalize(s, 1.0)
+        f.M = 1.0  # the pixel's initial RIS is one technique of confidence 1, whatever its candidate count
+        out = store(out, f)
     reservoirs[pixel] = out
     events[pixel] = stage_events(s, 0, rays)

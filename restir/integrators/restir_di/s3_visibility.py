@@ -11,23 +11,24 @@ Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffe
 import warp as wp
 
 from ...device.scene_device import SceneDevice
-from .gbuffer import load_shading
+from ..common.events import ray_events
+from ..common.gbuffer import GBuffer
+from ..common.shading import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, light_visible
 
 
 @wp.kernel
-def visibility_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
-                      gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
+def visibility_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
                       reservoirs_in: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
                       events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     r = reservoirs_in[pixel]
     rays = int(0)
     if r.W > 0.0:
-        sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+        sh = load_shading(scene, gb, pixel)
         rays = 1
         if not light_visible(scene, sh.hit, r):
             r.W = 0.0
     reservoirs_out[pixel] = r
-    events[pixel] = wp.vec4i(0, 0, 0, rays)
+    events[pixel] = ray_events(rays)

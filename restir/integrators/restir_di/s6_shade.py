@@ -4,7 +4,7 @@ L = emission + f_s Le G V(y) W  (the resampled smooth part; V traced here, unles
       visibility-aware: then W > 0 already implies V = 1 at this pixel)
       + the delta lobes' direct light, by BSDF sampling (kept only when a delta lobe is chosen;
         the smooth lobes are the resampled part's), all times the filter weight.
-Reads: scene, G-buffer, emission, reservoirs. Writes: sample_L, events (NaN/inf outputs, counted
+Reads: scene, G-buffer, filter weight, emission (all from the primary-hit stage), reservoirs. Writes: sample_L, events (NaN/inf outputs, counted
 and kept: never silently zeroed; rays).
 """
 import warp as wp
@@ -15,25 +15,27 @@ from ...device.lights import env_eval, triangle_emission
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
 from ...device.sampling import to_world
 from ...device.scene_device import SceneDevice
-from ...device.types import DIMS_PER_SAMPLE, ENV_NONE, STAGE_DI_SHADE
-from .gbuffer import load_shading
+from ...device.streams import DI_DIM_SHADE_DIR, DI_DIM_SHADE_LOBE, DIMS_PER_SAMPLE, STAGE_DI_SHADE
+from ...device.types import ENV_NONE
+from ..common.events import output_events
+from ..common.gbuffer import GBuffer
+from ..common.shading import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, light_visible, unshadowed_contribution
 
 
 @wp.kernel
-def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.array(dtype=wp.int32),
-                 gb_bary: wp.array(dtype=wp.vec2), gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3),
-                 gb_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
+def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
+                 primary_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
                  reservoirs: wp.array(dtype=DIReservoir), sample_L: wp.array(dtype=wp.vec3),
                  events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     L = emission[pixel]
     rays = int(0)
-    sh = load_shading(scene, gb_tri, gb_bary, gb_t, gb_dir, pixel)
+    sh = load_shading(scene, gb, pixel)
     if sh.valid != 0:
         hit = sh.hit
-        weight = gb_weight[pixel]
+        weight = primary_weight[pixel]
         # ---- resampled smooth part
         r = reservoirs[pixel]
         if r.W > 0.0:
@@ -47,7 +49,8 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
         # ---- delta lobes: one BSDF sample, kept when it chose a delta lobe
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_SHADE), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
-        bs = bsdf_sample(sh.mat, sh.wi, rng_uniform(key, base), rng_uniform2(key, base + wp.uint32(1)))
+        bs = bsdf_sample(sh.mat, sh.wi, rng_uniform(key, base + wp.uint32(DI_DIM_SHADE_LOBE)),
+                         rng_uniform2(key, base + wp.uint32(DI_DIM_SHADE_DIR)))
         if bs.valid != 0 and bs.is_delta != 0:
             d = wp.normalize(to_world(sh.frame, bs.wo))
             h2 = trace_closest(scene, offset_origin(hit.p, hit.ng, d), d, T_MAX)
@@ -59,5 +62,4 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb_tri: wp.a
                 Le = env_eval(scene, d)
             L += wp.cw_mul(bs.weight, Le) * weight
     sample_L[pixel] = L
-    finite = L[0] == L[0] and L[1] == L[1] and L[2] == L[2] and wp.abs(L[0] + L[1] + L[2]) < 3.0e38
-    events[pixel] = wp.vec4i(wp.where(finite, 0, 1), 0, 0, rays)
+    events[pixel] = output_events(L, rays)

@@ -1,10 +1,11 @@
-"""Reading a pixel's primary hit back from the G-buffer (shared by every reuse stage)."""
+"""A pixel's primary hit rebuilt from a G-buffer: everything a target function needs there."""
 import warp as wp
 
 from ...device.bsdf import Material
 from ...device.intersect import SurfaceHit, surface_at
 from ...device.sampling import Frame, frame_from_normal, to_local
 from ...device.scene_device import SceneDevice, material_at
+from .gbuffer import GBuffer
 
 
 @wp.struct
@@ -18,18 +19,17 @@ class Shading:
 
 
 @wp.func
-def load_shading(scene: SceneDevice, gb_tri: wp.array(dtype=wp.int32), gb_bary: wp.array(dtype=wp.vec2),
-                 gb_t: wp.array(dtype=float), gb_dir: wp.array(dtype=wp.vec3), pixel: int) -> Shading:
+def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     s = Shading()
-    tri = gb_tri[pixel]
+    tri = gb.tri[pixel]
     s.valid = 0
     if tri < 0:
         return s
-    b = gb_bary[pixel]
-    s.hit = surface_at(scene, tri, b[0], b[1], gb_t[pixel])
+    b = gb.bary[pixel]
+    s.hit = surface_at(scene, tri, b[0], b[1], gb.t[pixel])
     s.mat = material_at(scene, tri, s.hit.uv)
     s.frame = frame_from_normal(s.hit.ns)
-    s.wi = to_local(s.frame, -gb_dir[pixel])
+    s.wi = to_local(s.frame, -gb.dir[pixel])
     s.valid = 1
     return s
 

@@ -1,0 +1,89 @@
+"""Random streams: which stage owns which stream, and how each stage lays out its dimensions.
+
+A random number is rng_uniform(rng_key(seed, frame, STAGE, pixel), dim) (device/rng.py). Two
+uses of the same (stage, dim) would correlate decisions that the estimators assume independent,
+so every stage id range and every per-sample dimension layout is declared here, once, and
+`tests/unit/test_streams.py` checks that no two overlap (`STAGE_RANGES`, `DIM_LAYOUTS`).
+
+A stage's dimensions for sample s (the spp index within a frame) start at s * DIMS_PER_SAMPLE of
+that stage; within a sample each use has a named offset.
+"""
+import warp as wp
+
+# ----------------------------------------------------------------------------- stage ids
+STAGE_CAMERA = wp.constant(0)      # camera rays of every method (common random numbers)
+STAGE_PATH_TRACE = wp.constant(1)  # the path tracer's paths (and its first light sample per vertex)
+STAGE_DI_INITIAL = wp.constant(11)
+STAGE_DI_SHADE = wp.constant(12)
+STAGE_DI_TEMPORAL = wp.constant(13)
+STAGE_DI_SPATIAL = wp.constant(20)  # + round index, round < MAX_SPATIAL_ROUNDS
+STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (0 < j < 256)
+
+MAX_SPATIAL_ROUNDS = 8
+MAX_NEE_SAMPLES = 256
+
+# (name, first stage id, number of consecutive ids)
+STAGE_RANGES = (
+    ("camera", STAGE_CAMERA, 1),
+    ("path_trace", STAGE_PATH_TRACE, 1),
+    ("di_initial", STAGE_DI_INITIAL, 1),
+    ("di_shade", STAGE_DI_SHADE, 1),
+    ("di_temporal", STAGE_DI_TEMPORAL, 1),
+    ("di_spatial", STAGE_DI_SPATIAL, MAX_SPATIAL_ROUNDS),
+    ("path_nee", STAGE_PATH_NEE + 1, MAX_NEE_SAMPLES - 1),
+)
+
+# ----------------------------------------------------------------------------- camera
+CAMERA_DIMS_PER_SAMPLE = wp.constant(2)   # the filter-importance-sampled pixel position
+
+# ----------------------------------------------------------------------------- path tracer
+# DIMS_PER_BOUNCE numbers per bounce; bounce b (b >= 1: the vertex after b-1 scatters) starts at
+# s * DIMS_PER_SAMPLE + b * DIMS_PER_BOUNCE. Slots 0 and 1 are free (camera rays have their own
+# stream); the extra light samples' streams (STAGE_PATH_NEE + j) use the same layout.
+DIMS_PER_BOUNCE = wp.constant(8)
+DIMS_PER_SAMPLE = wp.constant(8 * 1024)
+MAX_SEGMENTS = 1023                # DIMS_PER_SAMPLE / DIMS_PER_BOUNCE - 1: samples never overlap
+DIM_LIGHT_SELECT = wp.constant(2)  # 1 number
+DIM_LIGHT_POINT = wp.constant(3)   # 2 numbers
+DIM_BSDF_LOBE = wp.constant(5)     # 1 number
+DIM_BSDF_DIR = wp.constant(6)      # 2 numbers
+DIM_RR = wp.constant(7)            # 1 number: Russian roulette
+
+# ----------------------------------------------------------------------------- ReSTIR DI
+# initial RIS: candidate j uses s * DIMS_PER_SAMPLE + j * DI_DIMS_PER_CANDIDATE + {0: light or lobe
+# selection, 1-2: point on the light or BSDF direction, 3: the RIS selection}
+DI_DIMS_PER_CANDIDATE = wp.constant(4)
+DI_DIM_CANDIDATE_SELECT = wp.constant(0)
+DI_DIM_CANDIDATE_POINT = wp.constant(1)
+DI_DIM_CANDIDATE_RIS = wp.constant(3)
+DI_MAX_CANDIDATES = 2048           # DIMS_PER_SAMPLE / DI_DIMS_PER_CANDIDATE
+# shading: s * DIMS_PER_SAMPLE + {0: lobe, 1-2: direction} of the delta-lobe BSDF sample
+DI_DIM_SHADE_LOBE = wp.constant(0)
+DI_DIM_SHADE_DIR = wp.constant(1)
+# temporal: s * DI_TEMPORAL_DIMS_PER_SAMPLE + {0: the current input's selection, 1: the history's}
+DI_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
+# spatial (one stream per round): neighbour j uses s * DI_SPATIAL_DIMS_PER_SAMPLE +
+# j * DI_SPATIAL_DIMS_PER_NEIGHBOR + {0-1: disk offset, 2: selection}; the canonical input's
+# selection is DI_SPATIAL_DIM_CANONICAL
+DI_SPATIAL_DIMS_PER_SAMPLE = wp.constant(256)
+DI_SPATIAL_DIMS_PER_NEIGHBOR = wp.constant(4)
+DI_SPATIAL_DIM_OFFSET = wp.constant(0)
+DI_SPATIAL_DIM_SELECT = wp.constant(2)
+DI_SPATIAL_DIM_CANONICAL = wp.constant(255)
+DI_MAX_NEIGHBORS = 32
+
+# (stage, numbers per sample, [(first, count) of each use within one sample at the largest settings])
+DIM_LAYOUTS = (
+    ("camera", CAMERA_DIMS_PER_SAMPLE, [(0, 2)]),
+    ("path_trace", DIMS_PER_SAMPLE,
+     [(b * DIMS_PER_BOUNCE + o, n) for b in range(1, MAX_SEGMENTS + 1)
+      for o, n in ((DIM_LIGHT_SELECT, 1), (DIM_LIGHT_POINT, 2), (DIM_BSDF_LOBE, 1), (DIM_BSDF_DIR, 2), (DIM_RR, 1))]),
+    ("di_initial", DIMS_PER_SAMPLE,
+     [(j * DI_DIMS_PER_CANDIDATE + o, n) for j in range(DI_MAX_CANDIDATES)
+      for o, n in ((DI_DIM_CANDIDATE_SELECT, 1), (DI_DIM_CANDIDATE_POINT, 2), (DI_DIM_CANDIDATE_RIS, 1))]),
+    ("di_shade", DIMS_PER_SAMPLE, [(DI_DIM_SHADE_LOBE, 1), (DI_DIM_SHADE_DIR, 2)]),
+    ("di_temporal", DI_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
+    ("di_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
+     [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(DI_MAX_NEIGHBORS)
+      for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
+)

@@ -1,0 +1,47 @@
+"""Which other pixels' reservoirs a pixel may reuse: the previous frame's pixel that saw the same
+point (temporal) and nearby pixels (spatial). Both choices depend on geometry and screen position
+only, never on reservoir contents, so the set of MIS techniques is fixed before sampling.
+"""
+
+import warp as wp
+
+from ...device.camera import Camera, project_to_pixel
+from ...device.sampling import square_to_uniform_disk_concentric
+
+NO_PIXEL = wp.constant(-1)
+
+# The literature's spatial radii are given for 1080-line images (ReSTIR DI: 30 px, ReSTIR PT:
+# 20 px); `spatial_radius_for` scales them with the image height, one rule for every method.
+REFERENCE_LINES = 1080.0
+MIN_SPATIAL_RADIUS = 3.0
+
+@wp.func
+def reproject(prev_camera: Camera, p: wp.vec3) -> int:
+    """The previous camera's pixel whose centre region contains world point p (the pixel that
+    saw p last frame, for a static scene); NO_PIXEL when p was behind that camera or off screen."""
+    xy = project_to_pixel(prev_camera, p)
+    qx = int(wp.floor(xy[0]))
+    qy = int(wp.floor(xy[1]))
+    if xy[0] < 0.0 or xy[1] < 0.0 or qx >= prev_camera.width or qy >= prev_camera.height:
+        return NO_PIXEL
+    return qy * prev_camera.width + qx
+
+@wp.func
+def spatial_neighbor(u: wp.vec2, pixel: int, width: int, height: int, radius: float) -> int:
+    """A pixel drawn uniformly (by area, then rounded) in a disk of `radius` pixels around `pixel`,
+    from the two uniform numbers u; NO_PIXEL when it falls off screen or on the pixel itself."""
+    px = pixel % width
+    py = pixel // width
+    o = square_to_uniform_disk_concentric(u) * radius
+    nx = px + int(wp.round(o[0]))
+    ny = py + int(wp.round(o[1]))
+    if nx < 0 or ny < 0 or nx >= width or ny >= height or (nx == px and ny == py):
+        return NO_PIXEL
+    return ny * width + nx
+
+def spatial_radius_for(radius_at_1080: float, height: int) -> float:
+    """The spatial reuse radius in pixels for an image `height` lines high, from a radius given for
+    1080 lines: scaled with the height (neighbours then cover the same part of the scene at any
+    resolution), never below MIN_SPATIAL_RADIUS pixels (a smaller disk holds too few pixels)."""
+    return max(MIN_SPATIAL_RADIUS, radius_at_1080 * height / REFERENCE_LINES)
+
