@@ -4,6 +4,12 @@ Conventions (Mitsuba's): `wi` points toward the previous vertex (the camera side
 scattered direction, both away from the surface; `bsdf_eval` returns f(wi, wo) * |cos theta_o|;
 `BSDFSample.weight` = eval / pdf. Delta lobes have eval = pdf = 0 and `is_delta` set.
 Radiance is scaled by 1/eta^2 on refraction (radiance transport, as Mitsuba).
+
+Lobes (types.py LOBE_*): every sample reports the lobe it chose; `bsdf_eval_lobes` and
+`bsdf_pdf_lobes` restrict eval and pdf to a mask of lobes (the pdf including the probability of
+choosing those lobes, so restricted pdfs over a partition of the lobes sum to `bsdf_pdf`).
+`lobe_is_rough` and `bsdf_has_rough_component` classify lobes for path reuse: a reconnection
+needs rough lobes at both ends (ALGORITHMS.md 2.4, 3.1).
 """
 import warp as wp
 
@@ -12,6 +18,13 @@ from .microfacet import Microfacet, microfacet_D, microfacet_G, microfacet_pdf, 
 from .sampling import cosine_hemisphere_pdf, square_to_cosine_hemisphere
 from .types import (
     INV_PI,
+    LOBE_DELTA_REFLECTION,
+    LOBE_DELTA_TRANSMISSION,
+    LOBE_DIFFUSE_REFLECTION,
+    LOBE_GLOSSY_REFLECTION,
+    LOBE_GLOSSY_TRANSMISSION,
+    LOBES_DELTA,
+    LOBES_DIFFUSE,
     MAT_CONDUCTOR,
     MAT_DIELECTRIC,
     MAT_DIFFUSE,
@@ -53,6 +66,7 @@ class BSDFSample:
     is_delta: int
     eta: float        # relative IOR crossed (1 for reflection)
     valid: int
+    lobe: int         # the LOBE_* flag of the lobe sampled (0 when invalid)
 
 
 @wp.func
@@ -64,6 +78,7 @@ def invalid_sample() -> BSDFSample:
     s.is_delta = 0
     s.eta = 1.0
     s.valid = 0
+    s.lobe = 0
     return s
 
 
@@ -205,28 +220,49 @@ def roughplastic_specular_probability(mat: Material, t_i: float) -> float:
 
 
 @wp.func
-def roughplastic_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+def roughplastic_eval_parts(mat: Material, wi: wp.vec3, wo: wp.vec3, lobes: int) -> wp.vec3:
+    """The coat's glossy reflection plus the diffuse base, each only where `lobes` has it."""
     if wi[2] <= 0.0 or wo[2] <= 0.0:
         return wp.vec3(0.0)
-    d = microfacet_of(mat)
-    m = wp.normalize(wi + wo)
-    spec = fresnel_dielectric(wp.dot(wi, m), mat.ior).r * microfacet_D(d, m) * microfacet_G(d, wi, wo, m) / (4.0 * wi[2])
-    denom = wp.vec3(1.0 - mat.fdr_int)
-    if mat.nonlinear != 0:
-        denom = wp.vec3(1.0) - mat.reflectance * mat.fdr_int
-    diff = wp.cw_div(mat.reflectance, denom) * (
-        INV_PI * wo[2] * coat_transmittance(mat, wi[2]) * coat_transmittance(mat, wo[2]) / (mat.ior * mat.ior))
-    return mat.specular_reflectance * spec + diff
+    out = wp.vec3(0.0)
+    if lobes & LOBE_GLOSSY_REFLECTION != 0:
+        d = microfacet_of(mat)
+        m = wp.normalize(wi + wo)
+        spec = fresnel_dielectric(wp.dot(wi, m), mat.ior).r * microfacet_D(d, m) * microfacet_G(d, wi, wo, m) / (4.0 * wi[2])
+        out = mat.specular_reflectance * spec
+    if lobes & LOBE_DIFFUSE_REFLECTION != 0:
+        denom = wp.vec3(1.0 - mat.fdr_int)
+        if mat.nonlinear != 0:
+            denom = wp.vec3(1.0) - mat.reflectance * mat.fdr_int
+        diff = wp.cw_div(mat.reflectance, denom) * (
+            INV_PI * wo[2] * coat_transmittance(mat, wi[2]) * coat_transmittance(mat, wo[2]) / (mat.ior * mat.ior))
+        out = out + diff
+    return out
+
+
+@wp.func
+def roughplastic_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    return roughplastic_eval_parts(mat, wi, wo, LOBE_GLOSSY_REFLECTION | LOBE_DIFFUSE_REFLECTION)
+
+
+@wp.func
+def roughplastic_pdf_parts(mat: Material, wi: wp.vec3, wo: wp.vec3, lobes: int) -> float:
+    """Density of sampling wo by the lobes in `lobes`, their selection probabilities included."""
+    if wi[2] <= 0.0 or wo[2] <= 0.0:
+        return 0.0
+    p_spec = roughplastic_specular_probability(mat, coat_transmittance(mat, wi[2]))
+    out = float(0.0)
+    if lobes & LOBE_GLOSSY_REFLECTION != 0:
+        m = wp.normalize(wi + wo)
+        out = p_spec * (microfacet_pdf(microfacet_of(mat), wi, m) / (4.0 * wp.dot(wo, m)))
+    if lobes & LOBE_DIFFUSE_REFLECTION != 0:
+        out = out + (1.0 - p_spec) * cosine_hemisphere_pdf(wo)
+    return out
 
 
 @wp.func
 def roughplastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
-    if wi[2] <= 0.0 or wo[2] <= 0.0:
-        return 0.0
-    p_spec = roughplastic_specular_probability(mat, coat_transmittance(mat, wi[2]))
-    m = wp.normalize(wi + wo)
-    spec = microfacet_pdf(microfacet_of(mat), wi, m) / (4.0 * wp.dot(wo, m))
-    return p_spec * spec + (1.0 - p_spec) * cosine_hemisphere_pdf(wo)
+    return roughplastic_pdf_parts(mat, wi, wo, LOBE_GLOSSY_REFLECTION | LOBE_DIFFUSE_REFLECTION)
 
 
 # ----------------------------------------------------------------------------- dispatch
@@ -298,6 +334,7 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
         if wi[2] <= 0.0:
             return s
         s.wo = square_to_cosine_hemisphere(u)
+        s.lobe = LOBE_DIFFUSE_REFLECTION
         evaluate = 1
     elif mat.kind == MAT_CONDUCTOR:
         if wi[2] <= 0.0:
@@ -305,12 +342,14 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
         s.wo = reflect_local(wi)
         s.pdf = 1.0
         s.is_delta = 1
+        s.lobe = LOBE_DELTA_REFLECTION
         s.weight = wp.cw_mul(fresnel_conductor(wi[2], mat.eta, mat.k), mat.specular_reflectance)
         s.valid = 1
     elif mat.kind == MAT_ROUGHCONDUCTOR:
         if wi[2] <= 0.0:
             return s
         s.wo = reflect_about(wi, microfacet_sample(microfacet_of(mat), wi, u))
+        s.lobe = LOBE_GLOSSY_REFLECTION
         evaluate = 1
     elif mat.kind == MAT_DIELECTRIC:
         fr = fresnel_dielectric(wi[2], mat.ior)
@@ -320,9 +359,11 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.wo = reflect_local(wi)
             s.pdf = fr.r
             s.weight = mat.specular_reflectance
+            s.lobe = LOBE_DELTA_REFLECTION
         else:
             s.wo = wp.vec3(-fr.eta_ti * wi[0], -fr.eta_ti * wi[1], fr.cos_t)
             s.pdf = 1.0 - fr.r
+            s.lobe = LOBE_DELTA_TRANSMISSION
             s.eta = fr.eta_it
             s.weight = mat.specular_transmittance * (fr.eta_ti * fr.eta_ti)
     elif mat.kind == MAT_THINDIELECTRIC:
@@ -337,9 +378,11 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.wo = reflect_local(wi)
             s.pdf = r
             s.weight = mat.specular_reflectance
+            s.lobe = LOBE_DELTA_REFLECTION
         else:
             s.wo = -wi
             s.pdf = 1.0 - r
+            s.lobe = LOBE_DELTA_TRANSMISSION
             s.weight = mat.specular_transmittance
     elif mat.kind == MAT_ROUGHDIELECTRIC:
         m = microfacet_sample(microfacet_of(mat), wi * wp.sign(wi[2]), u)
@@ -348,11 +391,13 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
         # function would read it as the other lobe, whose density is not what produced it.
         if u_lobe <= fr.r:
             s.wo = reflect_about(wi, m)
+            s.lobe = LOBE_GLOSSY_REFLECTION
             if s.wo[2] * wi[2] <= 0.0:
                 return invalid_sample()
         else:
             s.wo = m * (wp.dot(wi, m) * fr.eta_ti + fr.cos_t) - wi * fr.eta_ti
             s.eta = fr.eta_it
+            s.lobe = LOBE_GLOSSY_TRANSMISSION
             if s.wo[2] * wi[2] >= 0.0:
                 return invalid_sample()
         evaluate = 1
@@ -367,16 +412,20 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             s.is_delta = 1
             s.weight = mat.specular_reflectance * (f_i / p_spec)
             s.valid = 1
+            s.lobe = LOBE_DELTA_REFLECTION
         else:
             s.wo = square_to_cosine_hemisphere(u)
+            s.lobe = LOBE_DIFFUSE_REFLECTION
             evaluate = 1
     elif mat.kind == MAT_ROUGHPLASTIC:
         if wi[2] <= 0.0:
             return s
         if u_lobe < roughplastic_specular_probability(mat, coat_transmittance(mat, wi[2])):
             s.wo = reflect_about(wi, microfacet_sample(microfacet_of(mat), wi, u))
+            s.lobe = LOBE_GLOSSY_REFLECTION
         else:
             s.wo = square_to_cosine_hemisphere(u)
+            s.lobe = LOBE_DIFFUSE_REFLECTION
         evaluate = 1
     if evaluate != 0:
         # Directions on the wrong side (or where the lobe is zero) have pdf or eval 0: invalid.
@@ -386,6 +435,82 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
                 s.weight = f / s.pdf
                 s.valid = 1
+    if s.valid == 0:
+        s.lobe = 0
     if flipped:
         s.wo = flip_z(s.wo)
     return s
+
+
+# ----------------------------------------------------------------------------- lobes
+@wp.func
+def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
+    """The one non-delta lobe that can scatter wi into wo, for materials with at most one such
+    lobe on each side (all but roughplastic); 0 for delta-only materials."""
+    if mat.kind == MAT_DIFFUSE or mat.kind == MAT_PLASTIC:
+        return LOBE_DIFFUSE_REFLECTION
+    if mat.kind == MAT_ROUGHCONDUCTOR:
+        return LOBE_GLOSSY_REFLECTION
+    if mat.kind == MAT_ROUGHDIELECTRIC:
+        return wp.where(wi[2] * wo[2] > 0.0, LOBE_GLOSSY_REFLECTION, LOBE_GLOSSY_TRANSMISSION)
+    return 0
+
+
+@wp.func
+def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
+    """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
+    if mat.kind == MAT_ROUGHPLASTIC:
+        wi = wi_in
+        wo = wo_in
+        if mat.twosided != 0 and wi[2] < 0.0:
+            wi = flip_z(wi)
+            wo = flip_z(wo)
+        return roughplastic_eval_parts(mat, wi, wo, lobes)
+    if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
+        return wp.vec3(0.0)
+    return bsdf_eval(mat, wi_in, wo_in)
+
+
+@wp.func
+def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> float:
+    """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
+    sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
+    if mat.kind == MAT_ROUGHPLASTIC:
+        wi = wi_in
+        wo = wo_in
+        if mat.twosided != 0 and wi[2] < 0.0:
+            wi = flip_z(wi)
+            wo = flip_z(wo)
+        return roughplastic_pdf_parts(mat, wi, wo, lobes)
+    if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
+        return 0.0
+    return bsdf_pdf(mat, wi_in, wo_in)
+
+
+@wp.func
+def linear_roughness(mat: Material) -> float:
+    """Roughness on the linear scale (microfacet alpha = roughness^2, the convention of Falcor's
+    thresholds); for anisotropic lobes the smoother direction's, so "rough" means rough everywhere."""
+    return wp.sqrt(wp.min(mat.alpha_u, mat.alpha_v))
+
+
+@wp.func
+def lobe_is_rough(mat: Material, lobe: int, threshold: float) -> bool:
+    """Diffuse lobes are rough; glossy lobes when their linear roughness exceeds `threshold`
+    (ReSTIR PT: 0.2); delta lobes never."""
+    if lobe & LOBES_DIFFUSE != 0:
+        return True
+    if lobe & LOBES_DELTA != 0 or lobe == 0:
+        return False
+    return linear_roughness(mat) > threshold
+
+
+@wp.func
+def bsdf_has_rough_component(mat: Material, threshold: float) -> bool:
+    """True when some lobe of the material is rough (a diffuse part, or a glossy lobe rougher than
+    `threshold`): the condition for a vertex to serve as a reconnection vertex."""
+    if mat.kind == MAT_DIFFUSE or mat.kind == MAT_PLASTIC or mat.kind == MAT_ROUGHPLASTIC:
+        return True
+    if mat.kind == MAT_ROUGHCONDUCTOR or mat.kind == MAT_ROUGHDIELECTRIC:
+        return linear_roughness(mat) > threshold
+    return False

@@ -39,3 +39,16 @@ INV_FOUR_PI = wp.constant(0.07957747154594766788)
 LIGHT_ENV = wp.constant(-1)    # a direction toward the environment
 LIGHT_NONE = wp.constant(-2)   # no sample (a reservoir that selected nothing)
 NO_TRIANGLE = wp.constant(-1)  # a ray that hit nothing
+
+# BSDF lobes (bit flags). A BSDF sample reports the lobe it chose; restricted eval and pdf take a
+# mask of lobes. "Glossy" is a rough microfacet lobe, "delta" an ideal specular one.
+LOBE_DIFFUSE_REFLECTION = wp.constant(1)
+LOBE_DIFFUSE_TRANSMISSION = wp.constant(2)
+LOBE_GLOSSY_REFLECTION = wp.constant(4)
+LOBE_GLOSSY_TRANSMISSION = wp.constant(8)
+LOBE_DELTA_REFLECTION = wp.constant(16)
+LOBE_DELTA_TRANSMISSION = wp.constant(32)
+LOBES_DIFFUSE = wp.constant(3)
+LOBES_GLOSSY = wp.constant(12)
+LOBES_DELTA = wp.constant(48)
+LOBES_ALL = wp.constant(63)

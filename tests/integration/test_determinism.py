@@ -1,8 +1,13 @@
-"""Level 7: bitwise repeatability, and independence from how a CPU launch is sliced (R1, R2)."""
+"""Level 7: bitwise repeatability per (seed, frame), independent streams across seeds and frames,
+and independence from how a CPU launch is sliced (R1, R2). Statistical tests: alpha = 1e-3 each."""
 import numpy as np
 import pytest
+from scipy import stats as sps
 
 import restir
+
+
+ALPHA = 1e-3
 
 
 def render(slices, seed=3, device="cpu", frames=2, tracer="auto"):
@@ -11,9 +16,26 @@ def render(slices, seed=3, device="cpu", frames=2, tracer="auto"):
     return restir.render(scene, cfg).image
 
 
+def frame_images(seed, frames=2, device="cpu", spp=3, width=24, height=20, slices=2):
+    """The per-frame images (F, H, W, 3) of a path-traced render."""
+    scene = restir.load_scene("builtin:cornell-box-glossy", width=width, height=height)
+    cfg = restir.RenderConfig(spp=spp, frames=frames, seed=seed, device=device, max_depth=6, slices=slices,
+                              keep_frames=True)
+    return restir.render(scene, cfg).frame_images
+
+
 def test_same_seed_is_bitwise_identical():
     a, b = render(2), render(2)
     assert np.array_equal(a, b)
+
+
+def test_same_seed_and_frame_is_bitwise_identical():
+    """A path-traced frame is a function of (seed, frame index) only: rendering it again, or as
+    part of a longer run, reproduces it bit for bit."""
+    a, b = frame_images(3, frames=2), frame_images(3, frames=2)
+    assert np.array_equal(a, b)
+    assert np.array_equal(frame_images(3, frames=1)[0], a[0])  # frame 0 alone = frame 0 of two
+    assert np.array_equal(frame_images(3, frames=3)[:2], a)    # a third frame changes neither
 
 
 @pytest.mark.parametrize("tracer", ["auto", "warp"])
@@ -23,18 +45,73 @@ def test_result_is_independent_of_slicing(slices, tracer):
 
 
 def test_seeds_and_frames_give_independent_streams():
-    a, b, c, d = (render(2, seed=s, frames=1) for s in (3, 4, 5, 6))
-    assert not np.array_equal(a, b)
-    # differences of independent renders are independent noise: their correlation is ~N(0, 1/n)
-    x, y = (a - b).mean(-1).ravel(), (c - d).mean(-1).ravel()  # one value per pixel (channels correlate)
-    assert abs(np.corrcoef(x, y)[0, 1]) < 5 / np.sqrt(x.size)
+    """Every (seed, frame) pair has its own random stream: all eight images of seeds 3..6 x
+    frames 0, 1 differ, and differences of disjoint pairs are independent.
+
+    Independence is tested with an exact sign test: the difference A - B of two independent
+    renders of one pixel is symmetric about 0, so when a second such difference C - D is
+    independent of it, their signs agree with probability 1/2, independently over pixels
+    (pixels that render the same value in both pairs are left out). Pearson's correlation would
+    be dominated by the few pixels with fireflies, and its 1/sqrt(n) spread does not hold.
+    Binomial test per comparison, alpha = 1e-3 split over the three comparisons; with about
+    12,000 pixels a sign-agreement rate of 0.53 instead of 0.5 is caught."""
+    imgs = {(s, f): im for s in (3, 4, 5, 6) for f, im in enumerate(frame_images(s, frames=2, spp=1, width=128,
+                                                                                 height=96))}
+    keys = list(imgs)
+    for i, k in enumerate(keys):
+        for k2 in keys[i + 1:]:
+            assert not np.array_equal(imgs[k], imgs[k2]), f"(seed, frame) {k} and {k2} render the same image"
+
+    def diff(k, k2):  # one value per pixel (the channels of a pixel correlate)
+        return (imgs[k].astype(np.float64) - imgs[k2]).sum(-1).ravel()
+
+    pairs = {
+        "frames": (diff((3, 0), (3, 1)), diff((4, 0), (4, 1))),
+        "seeds": (diff((3, 0), (4, 0)), diff((5, 0), (6, 0))),
+        "seed + frame": (diff((3, 1), (4, 0)), diff((5, 1), (6, 0))),  # a stream (s, f + 1) = (s + 1, f) shows here
+    }
+    for name, (x, y) in pairs.items():
+        judged = (x != 0) & (y != 0)
+        n = int(judged.sum())
+        agree = int((np.sign(x[judged]) == np.sign(y[judged])).sum())
+        assert n > 10_000
+        p = sps.binomtest(agree, n, 0.5).pvalue
+        assert p > ALPHA / len(pairs), f"{name}: signs agree in {agree} of {n} pixels (p={p:.2e})"
+
+
+def assert_same_mean(a, b, alpha=ALPHA):
+    """Welch's t-test, per channel, of the image means of two sets of independent frames
+    (F, H, W, 3): path-traced frames of distinct (seed, frame) pairs are independent
+    estimates of the same image. alpha is split over the three channels (Bonferroni)."""
+    ma, mb = a.mean(axis=(1, 2)).astype(np.float64), b.mean(axis=(1, 2)).astype(np.float64)
+    for c in range(3):
+        t, p = sps.ttest_ind(ma[:, c], mb[:, c], equal_var=False)
+        assert p > alpha / 3, (f"channel {c}: image means {ma[:, c].mean():.5g} vs {mb[:, c].mean():.5g} "
+                               f"(t={t:.2f}, p={p:.2e})")
+
+
+# 64 independent frames of 32x32 pixels x 16 spp per side: the relative standard error of the
+# difference of the two image means is 0.6-0.8% per channel, so with the t-test's critical
+# value of about 3.7 a bias of 3-4% is caught with 80% power (a 5% bias fails reliably).
+STAT_FRAMES, STAT_SPP, STAT_SIZE = 64, 16, 32
+
+
+def stat_frames(seed, device):
+    return frame_images(seed, frames=STAT_FRAMES, device=device, spp=STAT_SPP, width=STAT_SIZE, height=STAT_SIZE,
+                        slices=None)
+
+
+def test_independent_seeds_agree_statistically():
+    """Two seeds estimate the same image: their image means pass a t-test (alpha = 1e-3)."""
+    assert_same_mean(stat_frames(3, "cpu"), stat_frames(4, "cpu"))
 
 
 def test_cuda_matches_cpu_statistically(device):
+    """CPU and CUDA renders, with different seeds so that they are independent, estimate the
+    same image: their image means pass a t-test (alpha = 1e-3)."""
     if device == "cpu":
         pytest.skip("run with --device cuda")
-    a, b = render(None, device="cpu", frames=4), render(None, device=device, frames=4)
-    assert np.abs(a.mean() - b.mean()) < 0.05 * a.mean()
+    assert_same_mean(stat_frames(3, "cpu"), stat_frames(4, device))
 
 
 def render_di(slices, mutation="none", reverse=False):

@@ -19,8 +19,8 @@ from scipy import stats as sps
 
 from restir.device.rng import rng_key, rng_uniform
 from restir.parallel import launch_pixels
-from restir.resampling.mis import balance_weight, pairwise_canonical_term, pairwise_neighbor_weight, techniques_vec
-from restir.resampling.ris import cap_confidence, ris_contribution_weight, ris_init, ris_stream
+from restir.resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization, talbot_weight2
+from restir.resampling.ris import cap_confidence, ris_contribution_weight, ris_finalize, ris_init, ris_merge, ris_stream
 
 P = 9
 
@@ -112,44 +112,44 @@ def canonical_ris(cfg: ToyConfig, i: int, key: wp.uint32) -> ToyReservoir:
 
 @wp.func
 def temporal_merge(cfg: ToyConfig, i: int, q: int, cur: ToyReservoir, prev: ToyReservoir, u: wp.vec2) -> ToyReservoir:
-    """Current pixel i with the previous frame's pixel q: generalized balance over the two."""
+    """Current pixel i with the previous frame's pixel q: generalized balance over the two,
+    written as the ReSTIR stages write it (ris_merge with explicit J, talbot_weight2, ris_finalize)."""
     if cfg.mut_skip_zero_canonical != 0 and f_pixel(i, cur.y, cfg.failures) * cur.W == 0.0:
         return cur
     Mp = cap_confidence(prev.M, cfg.cap)
     Mc = cur.M
-    d = techniques_vec()
     s = ris_init()
-    # canonical sample y_c
+    # canonical sample y_c, against the history's density for it (through the back-shift)
     pc = f_pixel(i, cur.y, cfg.failures)
     back = shift(i, q, cur.y, cfg.failures)
-    d[0] = pc * Mc
-    d[1] = f_pixel(q, back[0], cfg.failures) * back[1] * Mp
-    s = ris_stream(s, balance_weight(d, 2, 0) * pc * cur.W, pc, Mc, 0, u[0])
+    m_c = talbot_weight2(pc * Mc, f_pixel(q, back[0], cfg.failures) * back[1] * Mp, 0)
+    s = ris_merge(s, m_c, pc, 1.0, cur.W, Mc, 0, u[0])
     # previous sample, shifted into pixel i
     fwd = shift(q, i, prev.y, cfg.failures)
     pt = f_pixel(i, fwd[0], cfg.failures)
-    d[0] = pt * Mc
-    d[1] = 0.0
+    d_q = float(0.0)
     if fwd[1] > 0.0:
-        d[1] = f_pixel(q, prev.y, cfg.failures) / fwd[1] * Mp
-    s = ris_stream(s, balance_weight(d, 2, 1) * pt * fwd[1] * prev.W, pt, Mp, 1, u[1])
+        d_q = f_pixel(q, prev.y, cfg.failures) / fwd[1] * Mp
+    m_q = talbot_weight2(pt * Mc, d_q, 1)
+    s = ris_merge(s, m_q, pt, fwd[1], prev.W, Mp, 1, u[1])
+    f = ris_finalize(s, 1.0)
     out = ToyReservoir()
     out.y = wp.where(s.selected == 1, fwd[0], cur.y)
-    out.W = ris_contribution_weight(s, 1.0)
-    out.M = s.M
+    out.W = f.W
+    out.M = f.M
     return out
 
 
 @wp.func
 def spatial_merge(cfg: ToyConfig, i: int, base: int, src: wp.array(dtype=ToyReservoir), key: wp.uint32) -> ToyReservoir:
-    """Pairwise MIS over the pixel's own reservoir and its k neighbours (ALGORITHMS.md 4.3)."""
+    """Pairwise MIS over the pixel's own reservoir and its k neighbours (ALGORITHMS.md 4.3), with
+    the production accumulator (pairwise_init / pairwise_add_neighbor / pairwise_normalization)."""
     c = src[base + i]
     if cfg.mut_skip_zero_canonical != 0 and f_pixel(i, c.y, cfg.failures) * c.W == 0.0:
         return c
     s = ris_init()
     pc = f_pixel(i, c.y, cfg.failures)
-    mc = float(1.0)
-    V = int(0)
+    mis = pairwise_init(cfg.k)
     y_sel = c.y
     for j in range(cfg.k):
         n = (i + neighbor_offset(j)) % P
@@ -158,25 +158,24 @@ def spatial_merge(cfg: ToyConfig, i: int, base: int, src: wp.array(dtype=ToyRese
         r = src[base + n]
         if cfg.mut_drop_invalid != 0 and r.W == 0.0:
             continue
-        V += 1
         fwd = shift(n, i, r.y, cfg.failures)
         py = f_pixel(i, fwd[0], cfg.failures)
         d_i = float(0.0)
         if fwd[1] > 0.0:
             d_i = f_pixel(n, r.y, cfg.failures) / fwd[1] * r.M
-        m_i = pairwise_neighbor_weight(d_i, py * c.M, cfg.k)
-        s = ris_stream(s, m_i * py * fwd[1] * r.W, py, r.M, j, rng_uniform(key, wp.uint32(j)))
+        back = shift(i, n, c.y, cfg.failures)
+        mis = pairwise_add_neighbor(mis, d_i, py * c.M, pc * c.M, f_pixel(n, back[0], cfg.failures) * back[1] * r.M)
+        s = ris_merge(s, mis.m_i, py, fwd[1], r.W, r.M, j, rng_uniform(key, wp.uint32(j)))
         if s.selected == j:
             y_sel = fwd[0]
-        back = shift(i, n, c.y, cfg.failures)
-        mc += pairwise_canonical_term(pc * c.M, f_pixel(n, back[0], cfg.failures) * back[1] * r.M, cfg.k)
-    s = ris_stream(s, mc * pc * c.W, pc, c.M, 99, rng_uniform(key, wp.uint32(99)))
+    s = ris_merge(s, mis.m_c, pc, 1.0, c.W, c.M, 99, rng_uniform(key, wp.uint32(99)))
     if s.selected == 99:
         y_sel = c.y
+    f = ris_finalize(s, pairwise_normalization(mis))
     out = ToyReservoir()
     out.y = y_sel
-    out.W = ris_contribution_weight(s, float(V + 1))
-    out.M = s.M
+    out.W = f.W
+    out.M = f.M
     return out
 
 
@@ -220,7 +219,7 @@ def exact_integrals(failures: bool) -> np.ndarray:
 
 
 def run_toy(frames=8, candidates=1, temporal=False, cap=0.0, k=0, rounds=0, failures=False, mutation=None,
-            n=1 << 18, seed=1):
+            n=1 << 18, seed=1, device="cpu"):
     cfg = ToyConfig()
     cfg.frames, cfg.candidates, cfg.temporal, cfg.cap = frames, candidates, int(temporal), float(cap)
     cfg.k, cfg.rounds, cfg.failures = k, rounds if k else 0, int(failures)
@@ -232,9 +231,9 @@ def run_toy(frames=8, candidates=1, temporal=False, cap=0.0, k=0, rounds=0, fail
     s1 = np.zeros((frames, P))
     s2 = np.zeros((frames, P))
     for start in range(0, n, chunk):
-        bufs = [wp.zeros(chunk * P, dtype=ToyReservoir, device="cpu") for _ in range(3)]
-        out = wp.zeros((chunk, frames * P), dtype=float, device="cpu")
-        launch_pixels(toy_kernel, chunk, inputs=[cfg, wp.uint32(seed + 7919 * start), *bufs, out], outputs=[], device="cpu")
+        bufs = [wp.zeros(chunk * P, dtype=ToyReservoir, device=device) for _ in range(3)]
+        out = wp.zeros((chunk, frames * P), dtype=float, device=device)
+        launch_pixels(toy_kernel, chunk, inputs=[cfg, wp.uint32(seed + 7919 * start), *bufs, out], outputs=[], device=device)
         F = out.numpy().astype(np.float64).reshape(chunk, frames, P)
         s1 += F.sum(0)
         s2 += (F * F).sum(0)
@@ -283,9 +282,9 @@ CONFIGS = {
 
 @pytest.mark.parametrize("failures", [False, True], ids=["smooth", "failures"])
 @pytest.mark.parametrize("name", list(CONFIGS))
-def test_gris_is_unbiased(name, failures):
+def test_gris_is_unbiased(name, failures, device):
     cfg = CONFIGS[name]
-    z, crit, mdb, var = run_toy(failures=failures, n=N_FAST, **cfg)
+    z, crit, mdb, var = run_toy(failures=failures, n=N_FAST, device=device, **cfg)
     print(f"{name} failures={failures}: max|z| {np.abs(z).max():.2f} (crit {crit:.2f}), MDB {100 * mdb.max():.2f}%")
     assert np.all(np.abs(z) < crit), np.round(z, 1)
     assert mdb.max() < 0.03
@@ -302,8 +301,8 @@ def test_gris_is_unbiased(name, failures):
 @pytest.mark.slow
 @pytest.mark.parametrize("failures", [False, True], ids=["smooth", "failures"])
 @pytest.mark.parametrize("name", list(CONFIGS))
-def test_gris_is_unbiased_slow(name, failures):
-    z, crit, mdb, _ = run_toy(failures=failures, n=1 << 20, frames=16, **CONFIGS[name])
+def test_gris_is_unbiased_slow(name, failures, device):
+    z, crit, mdb, _ = run_toy(failures=failures, n=1 << 20, frames=16, device=device, **CONFIGS[name])
     print(f"{name} failures={failures}: max|z| {np.abs(z).max():.2f} (crit {crit:.2f}), MDB {100 * mdb.max():.2f}%")
     assert np.all(np.abs(z) < crit), np.round(z, 1)
 
@@ -313,7 +312,7 @@ def test_gris_is_unbiased_slow(name, failures):
     ("skip_zero_canonical", dict(k=4, rounds=1)),
     ("drop_invalid", dict(k=4, rounds=1)),
 ])
-def test_mutations_are_detected(mutation, config):
+def test_mutations_are_detected(mutation, config, device):
     """Power check (TESTING.md 5.11): defects A1 and A3 must fail the same test."""
-    z, crit, _, _ = run_toy(failures=True, mutation=mutation, n=N_FAST, **config)
+    z, crit, _, _ = run_toy(failures=True, mutation=mutation, n=N_FAST, device=device, **config)
     assert np.abs(z).max() > crit, f"{mutation} not detected: max|z| {np.abs(z).max():.2f}"

@@ -36,12 +36,12 @@ def warps_kernel(u: wp.array(dtype=wp.vec2), out: wp.array2d(dtype=float)):
 
 
 @pytest.fixture(scope="module")
-def warped():
+def warped(device):
     rng = np.random.default_rng(1)
     u = rng.random((200_000, 2)).astype(np.float32)
     u = np.clip(u, 1e-4, 1 - 1e-4)  # round trips are ill-conditioned at the square's edges
-    out = wp.zeros((len(u), 19), dtype=float, device="cpu")
-    wp.launch(warps_kernel, dim=len(u), inputs=[wp.array(u, dtype=wp.vec2, device="cpu"), out], device="cpu")
+    out = wp.zeros((len(u), 19), dtype=float, device=device)
+    wp.launch(warps_kernel, dim=len(u), inputs=[wp.array(u, dtype=wp.vec2, device=device), out], device=device)
     return u, out.numpy()
 
 
@@ -99,9 +99,9 @@ def rng_kernel(seed: wp.uint32, out: wp.array2d(dtype=float)):
         out[i, d] = rng_uniform(key, wp.uint32(d))
 
 
-def test_rng_uniform_and_decorrelated():
-    out = wp.zeros((500_000, 4), dtype=float, device="cpu")
-    wp.launch(rng_kernel, dim=500_000, inputs=[wp.uint32(42), out], device="cpu")
+def test_rng_uniform_and_decorrelated(device):
+    out = wp.zeros((500_000, 4), dtype=float, device=device)
+    wp.launch(rng_kernel, dim=500_000, inputs=[wp.uint32(42), out], device=device)
     x = out.numpy()
     assert (x >= 0).all() and (x < 1).all()
     for d in range(4):
@@ -120,12 +120,13 @@ def alias_kernel(prob: wp.array(dtype=float), alias: wp.array(dtype=wp.int32), s
     out[i] = sp.sample_alias(prob, alias, rng_uniform(rng_key(seed, wp.uint32(0), wp.uint32(0), wp.uint32(i)), wp.uint32(0)))
 
 
-def test_alias_table_frequencies():
+def test_alias_table_frequencies(device):
     w = np.array([0.0, 1.0, 5.0, 0.0, 0.2, 100.0, 3.0, 0.0])
     prob, alias, pmf = alias_table(w)
     n = 1_000_000
-    out = wp.zeros(n, dtype=wp.int32, device="cpu")
-    wp.launch(alias_kernel, dim=n, inputs=[wp.array(prob, device="cpu"), wp.array(alias, device="cpu"), wp.uint32(5), out], device="cpu")
+    out = wp.zeros(n, dtype=wp.int32, device=device)
+    wp.launch(alias_kernel, dim=n, inputs=[wp.array(prob, device=device), wp.array(alias, device=device), wp.uint32(5), out],
+              device=device)
     counts = np.bincount(out.numpy(), minlength=len(w))
     assert counts[w == 0].sum() == 0, "a zero-weight entry was selected"
     keep = w > 0
@@ -145,15 +146,15 @@ def ndf_kernel(kind: int, au: float, av: float, dirs: wp.array(dtype=wp.vec3), o
 
 
 @pytest.mark.parametrize("kind,au,av", [(0, 0.1, 0.1), (0, 0.5, 0.5), (0, 0.2, 0.05), (1, 0.1, 0.1), (1, 0.6, 0.6), (1, 0.3, 0.08)])
-def test_microfacet_D_projected_area_is_one(kind, au, av):
+def test_microfacet_D_projected_area_is_one(kind, au, av, device):
     # integral of D(m) cos(theta_m) over the hemisphere = 1, on a fine (theta, phi) grid
     nt, npp = 4000, 256
     t = (np.arange(nt) + 0.5) / nt * (np.pi / 2)
     p = (np.arange(npp) + 0.5) / npp * 2 * np.pi
     T, P = np.meshgrid(t, p, indexing="ij")
     dirs = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3).astype(np.float32)
-    out = wp.zeros(len(dirs), dtype=float, device="cpu")
-    wp.launch(ndf_kernel, dim=len(dirs), inputs=[kind, au, av, wp.array(dirs, dtype=wp.vec3, device="cpu"), out], device="cpu")
+    out = wp.zeros(len(dirs), dtype=float, device=device)
+    wp.launch(ndf_kernel, dim=len(dirs), inputs=[kind, au, av, wp.array(dirs, dtype=wp.vec3, device=device), out], device=device)
     integral = (out.numpy().reshape(nt, npp) * np.sin(T)).sum() * (np.pi / 2 / nt) * (2 * np.pi / npp)
     assert abs(integral - 1) < 2e-3
 
@@ -170,7 +171,7 @@ def vndf_kernel(kind: int, au: float, av: float, wi: wp.vec3, dirs: wp.array(dty
 
 @pytest.mark.parametrize("kind,au,av,theta", [(0, 0.1, 0.1, 30), (0, 0.5, 0.5, 75), (0, 0.3, 0.1, 60),
                                               (1, 0.2, 0.2, 45), (1, 0.6, 0.3, 80)])
-def test_visible_normal_density_integrates_to_one(kind, au, av, theta):
+def test_visible_normal_density_integrates_to_one(kind, au, av, theta, device):
     """D_wi(m) = G1(wi, m) <wi, m> D(m) / cos(theta_i) is a density over m only with the exact
     Smith G1 (for Beckmann: the erf form, not the rational fit used in shading)."""
     nt, npp = 3000, 256
@@ -179,7 +180,8 @@ def test_visible_normal_density_integrates_to_one(kind, au, av, theta):
     T, P = np.meshgrid(t, p, indexing="ij")
     dirs = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3).astype(np.float32)
     wi = wp.vec3(np.sin(np.radians(theta)) * 0.6, np.sin(np.radians(theta)) * 0.8, np.cos(np.radians(theta)))
-    out = wp.zeros(len(dirs), dtype=float, device="cpu")
-    wp.launch(vndf_kernel, dim=len(dirs), inputs=[kind, au, av, wi, wp.array(dirs, dtype=wp.vec3, device="cpu"), out], device="cpu")
+    out = wp.zeros(len(dirs), dtype=float, device=device)
+    wp.launch(vndf_kernel, dim=len(dirs), inputs=[kind, au, av, wi, wp.array(dirs, dtype=wp.vec3, device=device), out],
+              device=device)
     integral = (out.numpy().reshape(nt, npp) * np.sin(T)).sum() * (np.pi / 2 / nt) * (2 * np.pi / npp)
     assert abs(integral - 1) < 3e-3
