@@ -113,6 +113,15 @@ def flip_z(v: wp.vec3) -> wp.vec3:
     return wp.vec3(v[0], v[1], -v[2])
 
 
+@wp.func
+def to_front(mat: Material, wi: wp.vec3, v: wp.vec3) -> wp.vec3:
+    """v as the front side sees it: a two-sided material hit from the back (wi below the
+    surface) behaves as its front, so both directions are mirrored through the surface."""
+    if mat.twosided != 0 and wi[2] < 0.0:
+        return flip_z(v)
+    return v
+
+
 # ----------------------------------------------------------------------------- rough dielectric helpers
 @wp.func
 def roughdielectric_half_vector(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
@@ -268,11 +277,8 @@ def roughplastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
 # ----------------------------------------------------------------------------- dispatch
 @wp.func
 def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
-    wi = wi_in
-    wo = wo_in
-    if mat.twosided != 0 and wi[2] < 0.0:
-        wi = flip_z(wi)
-        wo = flip_z(wo)
+    wi = to_front(mat, wi_in, wi_in)
+    wo = to_front(mat, wi_in, wo_in)
     if mat.kind == MAT_DIFFUSE:
         if wi[2] <= 0.0 or wo[2] <= 0.0:
             return wp.vec3(0.0)
@@ -296,11 +302,8 @@ def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
 
 @wp.func
 def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
-    wi = wi_in
-    wo = wo_in
-    if mat.twosided != 0 and wi[2] < 0.0:
-        wi = flip_z(wi)
-        wo = flip_z(wo)
+    wi = to_front(mat, wi_in, wi_in)
+    wo = to_front(mat, wi_in, wo_in)
     if mat.kind == MAT_DIFFUSE:
         if wi[2] <= 0.0:
             return 0.0
@@ -460,12 +463,7 @@ def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
 def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
     """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        wi = wi_in
-        wo = wo_in
-        if mat.twosided != 0 and wi[2] < 0.0:
-            wi = flip_z(wi)
-            wo = flip_z(wo)
-        return roughplastic_eval_parts(mat, wi, wo, lobes)
+        return roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
     if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
         return wp.vec3(0.0)
     return bsdf_eval(mat, wi_in, wo_in)
@@ -476,12 +474,7 @@ def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) ->
     """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
     sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        wi = wi_in
-        wo = wo_in
-        if mat.twosided != 0 and wi[2] < 0.0:
-            wi = flip_z(wi)
-            wo = flip_z(wo)
-        return roughplastic_pdf_parts(mat, wi, wo, lobes)
+        return roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
     if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
         return 0.0
     return bsdf_pdf(mat, wi_in, wo_in)

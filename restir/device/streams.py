@@ -38,8 +38,10 @@ CAMERA_DIMS_PER_SAMPLE = wp.constant(2)   # the filter-importance-sampled pixel 
 
 # ----------------------------------------------------------------------------- path tracer
 # DIMS_PER_BOUNCE numbers per bounce; bounce b (b >= 1: the vertex after b-1 scatters) starts at
-# s * DIMS_PER_SAMPLE + b * DIMS_PER_BOUNCE. Slots 0 and 1 are free (camera rays have their own
-# stream); the extra light samples' streams (STAGE_PATH_NEE + j) use the same layout.
+# s * DIMS_PER_SAMPLE + b * DIMS_PER_BOUNCE. Slot 0 is free (camera rays have their own stream);
+# the extra light samples' streams (STAGE_PATH_NEE + j) use the same layout. (Russian roulette
+# once drew slot 7, the BSDF direction's second number: survival then depended on the sampled
+# direction, a bias with `rr=true` that test_streams.py found.)
 DIMS_PER_BOUNCE = wp.constant(8)
 DIMS_PER_SAMPLE = wp.constant(8 * 1024)
 MAX_SEGMENTS = 1023                # DIMS_PER_SAMPLE / DIMS_PER_BOUNCE - 1: samples never overlap
@@ -47,7 +49,7 @@ DIM_LIGHT_SELECT = wp.constant(2)  # 1 number
 DIM_LIGHT_POINT = wp.constant(3)   # 2 numbers
 DIM_BSDF_LOBE = wp.constant(5)     # 1 number
 DIM_BSDF_DIR = wp.constant(6)      # 2 numbers
-DIM_RR = wp.constant(7)            # 1 number: Russian roulette
+DIM_RR = wp.constant(1)            # 1 number: Russian roulette
 
 # ----------------------------------------------------------------------------- ReSTIR DI
 # initial RIS: candidate j uses s * DIMS_PER_SAMPLE + j * DI_DIMS_PER_CANDIDATE + {0: light or lobe
