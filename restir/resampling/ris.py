@@ -103,6 +103,24 @@ def ris_finalize(s: RisState, normalization: float) -> ReservoirWeights:
     return f
 
 
+# A history with "no cap" is still capped at this multiple of the current confidence. The
+# official ReSTIR PT code uses 1e30 for its "no cap"; with spatial reuse, whose output
+# confidence is the sum of its inputs', M then grows by (1 + V)^rounds per frame until p_hat * M
+# overflows float32 (non-finite weights after 32-48 frames). 1e6 frames of history is no
+# practical cap, and keeps every p_hat * M finite.
+NO_CAP_RATIO = wp.constant(1.0e6)
+
+
+@wp.func
+def history_cap(cap_ratio: float, M_current: float) -> float:
+    """The cap of a temporal history's confidence: cap_ratio x the current input's (cap_ratio <= 0:
+    "no cap", NO_CAP_RATIO x). Every pass that reuses a history caps it through this."""
+    ratio = cap_ratio
+    if ratio <= 0.0:
+        ratio = NO_CAP_RATIO
+    return ratio * M_current
+
+
 @wp.func
 def cap_confidence(M: float, cap: float) -> float:
     """The one place confidences are capped (cap <= 0: no cap). The capped value must be used

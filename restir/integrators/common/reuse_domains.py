@@ -10,10 +10,10 @@ from ...device.sampling import square_to_uniform_disk_concentric
 
 NO_PIXEL = wp.constant(-1)
 
-# The literature's spatial radii are given for 1080-line images (ReSTIR DI: 30 px, ReSTIR PT:
+# Spatial radii are given for 1080-line images (the literature's: ReSTIR DI 30 px, ReSTIR PT
 # 20 px); `spatial_radius_for` scales them with the image height, one rule for every method.
 REFERENCE_LINES = 1080.0
-MIN_SPATIAL_RADIUS = 3.0
+MIN_SPATIAL_RADIUS = 2.0  # below 1.5 px most offsets round to the pixel itself (BENCHMARKS.md)
 
 @wp.func
 def reproject(prev_camera: Camera, p: wp.vec3) -> int:
@@ -45,3 +45,19 @@ def spatial_radius_for(radius_at_1080: float, height: int) -> float:
     resolution), never below MIN_SPATIAL_RADIUS pixels (a smaller disk holds too few pixels)."""
     return max(MIN_SPATIAL_RADIUS, radius_at_1080 * height / REFERENCE_LINES)
 
+
+
+def resolve_spatial_radius(setting, radius_at_1080: float, height: int) -> float:
+    """A method's `spatial.radius` setting in pixels: "auto" (the default) scales the method's
+    1080-line radius with the image; a number is taken as pixels."""
+    if setting == "auto":
+        return spatial_radius_for(radius_at_1080, height)
+    try:
+        radius = float(setting)
+    except (TypeError, ValueError):
+        radius = -1.0
+    if not radius > 0.0:
+        from ...config import ConfigError
+
+        raise ConfigError(f"spatial.radius must be 'auto' or a positive number of pixels, not '{setting}'")
+    return radius

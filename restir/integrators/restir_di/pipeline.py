@@ -6,11 +6,12 @@ render_frame is the table of contents; each stage is one kernel in its own file.
 import numpy as np
 import warp as wp
 
+from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS, MAX_SPATIAL_ROUNDS
 from ...film import PixelMoments
 from ..base import Integrator
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.primary_hits import primary_hits_kernel
-from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS, MAX_SPATIAL_ROUNDS
+from ..common.reuse_domains import resolve_spatial_radius
 from .params import DIParams
 from .reservoir import DIReservoir
 from .s2_initial import initial_kernel
@@ -49,11 +50,14 @@ class ReSTIRDI(Integrator):
     name = "restir-di"
     STAGES = ("gbuffer", "initial", "visibility", "temporal", "spatial", "shade")
     KERNELS = (primary_hits_kernel, initial_kernel, visibility_kernel, temporal_kernel, spatial_kernel, shade_kernel)
-    # Literature defaults (see docs/restir_di.md): 32 light candidates; temporal reuse with the
-    # history capped at 20x the current confidence; spatial reuse with 3 neighbours in a 30 px
-    # radius, 2 rounds (Bitterli et al. 2020, unbiased variant).
-    SETTINGS = {"candidates": 32, "candidates.bsdf": 1, "visibility": "reuse", "temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2,
-                "spatial.neighbors": 3, "spatial.radius": 30.0, "debug.mutation": "none"}
+    # Defaults chosen by measurement with a jittered camera (BENCHMARKS.md, "ReSTIR DI defaults"):
+    # 32 light candidates; temporal reuse with the history capped at 5x the current confidence
+    # (the literature's 20x drifts into blotches); spatial reuse with 3 neighbours, 2 rounds, in
+    # a radius of 15 px at 1080 lines scaled with the image height, at least 2 px (the
+    # literature's 30 px at any size left reuse nearly idle on small images).
+    SETTINGS = {"candidates": 32, "candidates.bsdf": 1, "visibility": "reuse", "temporal": True, "temporal.cap": 5.0,
+                "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": "auto", "debug.mutation": "none"}
+    SPATIAL_RADIUS_1080 = 15.0  # "auto" radius in pixels at 1080 lines (integrators/common/reuse_domains.py)
     VISIBILITY = ("reuse", "shading")
     MUTATIONS = tuple(MUTATIONS)
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
@@ -78,8 +82,7 @@ class ReSTIRDI(Integrator):
                 not 1 <= settings["spatial.neighbors"] <= DI_MAX_NEIGHBORS:
             raise ConfigError(f"spatial.rounds must be in [0, {MAX_SPATIAL_ROUNDS}] and spatial.neighbors in "
                               f"[1, {DI_MAX_NEIGHBORS}]")
-        if settings["spatial.radius"] <= 0:
-            raise ConfigError("spatial.radius must be positive")
+        resolve_spatial_radius(settings["spatial.radius"], ReSTIRDI.SPATIAL_RADIUS_1080, 1)  # raises if invalid
         if settings["debug.mutation"] not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
 
@@ -87,6 +90,10 @@ class ReSTIRDI(Integrator):
         return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
 
     def allocate(self) -> None:
+        self.spatial_radius = resolve_spatial_radius(self.settings["spatial.radius"], self.SPATIAL_RADIUS_1080,
+                                                     self.height)
+        if self.settings["spatial.radius"] == "auto":
+            self.settings["spatial.radius"] = self.spatial_radius  # the stats report the pixels used
         # this sample's primary hits and the previous sample's (the temporal technique's domain)
         self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
         self.primary_weight = self.buffer("primary_weight", float)
@@ -109,7 +116,7 @@ class ReSTIRDI(Integrator):
         p.temporal_cap = float(self.settings["temporal.cap"])
         p.spatial_round = 0
         p.spatial_k = int(self.settings["spatial.neighbors"])
-        p.spatial_radius = float(self.settings["spatial.radius"])
+        p.spatial_radius = float(self.spatial_radius)
         return p
 
     def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:

@@ -1,0 +1,93 @@
+"""The shared reuse domains (restir/integrators/common/reuse_domains.py): temporal reprojection,
+spatial neighbour selection and the default radius rule."""
+import numpy as np
+import pytest
+import warp as wp
+
+import restir
+from restir.config import ConfigError
+from restir.device.camera import Camera, generate_ray
+from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reproject, resolve_spatial_radius,
+                                                     spatial_neighbor, spatial_radius_for)
+from restir.scene.upload import DeviceScene
+
+
+@wp.kernel
+def reproject_kernel(cam: Camera, depth: float, out: wp.array(dtype=wp.int32)):
+    pixel = wp.tid()
+    # a point seen through the pixel, anywhere inside it (filter offsets within +-0.4 px)
+    ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, wp.vec2(0.3, 0.7))
+    out[pixel] = reproject(cam, ray.o + ray.d * depth)
+
+
+def test_reprojection_finds_the_pixel_that_saw_a_point(device):
+    scene = restir.load_scene("builtin:cornell-box", width=40, height=30)
+    cam = DeviceScene(scene, device).camera
+    out = wp.zeros(40 * 30, dtype=wp.int32, device=device)
+    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, 500.0, out], device=device)
+    np.testing.assert_array_equal(out.numpy(), np.arange(40 * 30))
+    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, -500.0, out], device=device)  # behind the camera
+    assert np.all(out.numpy() == NO_PIXEL)
+
+
+@wp.kernel
+def neighbor_kernel(u: wp.array(dtype=wp.vec2), pixel: int, width: int, height: int, radius: float,
+                    out: wp.array(dtype=wp.int32)):
+    i = wp.tid()
+    out[i] = spatial_neighbor(u[i], pixel, width, height, radius)
+
+
+@pytest.mark.parametrize("radius", [2.0, 7.5])
+def test_spatial_neighbors_are_uniform_in_the_disk(radius, device):
+    """Neighbours lie within radius + 0.5 px (rounding) and never on the pixel itself; each
+    offset is chosen in proportion to the disk area that rounds to it (chi-square, alpha 1e-3)."""
+    from restir.validation.stats import chi2_test
+
+    rng = np.random.default_rng(1)
+    n = 400_000
+    u = rng.random((n, 2)).astype(np.float32)
+    w, h, px, py = 64, 48, 30, 20
+    out = wp.zeros(n, dtype=wp.int32, device=device)
+    wp.launch(neighbor_kernel, dim=n, inputs=[wp.array(u, dtype=wp.vec2, device=device), py * w + px, w, h, radius, out],
+              device=device)
+    q = out.numpy()
+    valid = q != NO_PIXEL
+    dx, dy = q[valid] % w - px, q[valid] // w - py
+    assert np.all(dx * dx + dy * dy <= (radius + 0.71) ** 2) and not np.any((dx == 0) & (dy == 0))
+    # expected: area of the disk rounding to each offset, by a fine grid over the disk
+    g = (np.arange(2000) + 0.5) / 2000 * 2 - 1
+    X, Y = np.meshgrid(g, g)
+    inside = X * X + Y * Y <= 1
+    ox, oy = np.round(X[inside] * radius).astype(int), np.round(Y[inside] * radius).astype(int)
+    keys, area = np.unique(ox * 1000 + oy, return_counts=True)
+    keep = keys != 0
+    expected = area[keep] / area.sum() * n
+    got = dict(zip(*np.unique(dx * 1000 + dy, return_counts=True)))
+    counts = np.array([got.get(k, 0) for k in keys[keep]])
+    assert counts.sum() == valid.sum()
+    p, stat, dof = chi2_test(counts, expected, min_expected=5)
+    assert p > 1e-3, (stat, dof)
+    # off screen: a corner pixel loses about three quarters of its disk
+    wp.launch(neighbor_kernel, dim=n, inputs=[wp.array(u, dtype=wp.vec2, device=device), 0, w, h, radius, out],
+              device=device)
+    assert 0.6 < np.mean(out.numpy() == NO_PIXEL) < 0.9
+
+
+def test_spatial_radius_rule():
+    assert spatial_radius_for(15.0, 1080) == 15.0
+    assert spatial_radius_for(15.0, 2160) == 30.0
+    assert spatial_radius_for(15.0, 128) == MIN_SPATIAL_RADIUS   # 1.8 px: the floor
+    assert spatial_radius_for(15.0, 256) == pytest.approx(15.0 * 256 / 1080)
+    assert resolve_spatial_radius("auto", 15.0, 512) == pytest.approx(15.0 * 512 / 1080)
+    assert resolve_spatial_radius("4.5", 15.0, 512) == 4.5 and resolve_spatial_radius(6, 15.0, 512) == 6.0
+    for bad in ("-1", "0", "wide", None):
+        with pytest.raises(ConfigError):
+            resolve_spatial_radius(bad, 15.0, 512)
+
+
+def test_default_radius_is_reported_in_pixels():
+    scene = restir.load_scene("builtin:cornell-box", width=24, height=256)
+    r = restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, frames=1))
+    assert r.stats["settings"]["spatial.radius"] == pytest.approx(15.0 * 256 / 1080)
+    with pytest.raises(ConfigError):
+        restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, settings={"spatial.radius": "-3"}))
