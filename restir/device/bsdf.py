@@ -116,7 +116,9 @@ def flip_z(v: wp.vec3) -> wp.vec3:
 @wp.func
 def to_front(mat: Material, wi: wp.vec3, v: wp.vec3) -> wp.vec3:
     """v as the front side sees it: a two-sided material hit from the back (wi below the
-    surface) behaves as its front, so both directions are mirrored through the surface."""
+    surface) behaves as its front, so both directions are mirrored through the surface.
+    (bsdf_eval and bsdf_pdf spell this out inline: through this function, twice per call, the
+    path tracer ran about 5% slower on the CPU.)"""
     if mat.twosided != 0 and wi[2] < 0.0:
         return flip_z(v)
     return v
@@ -277,8 +279,11 @@ def roughplastic_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
 # ----------------------------------------------------------------------------- dispatch
 @wp.func
 def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
-    wi = to_front(mat, wi_in, wi_in)
-    wo = to_front(mat, wi_in, wo_in)
+    wi = wi_in
+    wo = wo_in
+    if mat.twosided != 0 and wi[2] < 0.0:
+        wi = flip_z(wi)
+        wo = flip_z(wo)
     if mat.kind == MAT_DIFFUSE:
         if wi[2] <= 0.0 or wo[2] <= 0.0:
             return wp.vec3(0.0)
@@ -302,8 +307,11 @@ def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
 
 @wp.func
 def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
-    wi = to_front(mat, wi_in, wi_in)
-    wo = to_front(mat, wi_in, wo_in)
+    wi = wi_in
+    wo = wo_in
+    if mat.twosided != 0 and wi[2] < 0.0:
+        wi = flip_z(wi)
+        wo = flip_z(wo)
     if mat.kind == MAT_DIFFUSE:
         if wi[2] <= 0.0:
             return 0.0
