@@ -7,8 +7,8 @@ import os as _os
 import warp as _wp
 
 # Warp prints a banner, one line per compiled module and a CUDA-driver warning on CPU-only
-# machines; keep the CLI's output to our own (RESTIR_WARP_VERBOSE=1 restores Warp's).
-if not _os.environ.get("RESTIR_WARP_VERBOSE"):
+# machines; keep the CLI's output to our own (RESTIR_WARP_VERBOSE=1 restores Warp's; 0 means off).
+if _os.environ.get("RESTIR_WARP_VERBOSE", "").strip().lower() not in ("1", "true", "yes", "on"):
     _wp.config.log_level = _wp.LOG_ERROR
 # No kernel is differentiated: skip adjoint code generation (halves compile times).
 _wp.config.enable_backward = False

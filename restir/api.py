@@ -6,7 +6,11 @@
     result.image        # (H, W, 3) float32, linear RGB, mean over frames
     result.stats        # per-stage ms, rays/s, bytes per pixel, ...
 """
+import contextlib
 import copy
+import os
+import sys
+import tempfile
 import time
 from dataclasses import dataclass
 
@@ -87,11 +91,48 @@ class RenderResult:
         return self.sample_var / max(n - 1, 1)
 
 
-def _init_warp():
+# Printed by Warp's native library (cuda_util.cpp, straight to file descriptor 2) on every
+# wp.init() of a machine without the CUDA driver; no Warp setting silences it.
+_CUDA_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
+
+
+def _init_warp(device: str = "cpu"):
+    """wp.init(), without Warp's CUDA-driver warning when no CUDA device was asked for and Warp's
+    own output is off (RESTIR_WARP_VERBOSE, restir/__init__.py); every other line it prints,
+    errors included, still reaches stderr."""
     import warp as wp
 
-    wp.init()
+    context = getattr(getattr(wp, "_src", None), "context", None) or getattr(wp, "context", None)
+    initialized = getattr(context, "runtime", None) is not None  # then wp.init() prints nothing
+    if initialized or device.startswith("cuda") or wp.config.log_level < wp.LOG_ERROR:
+        wp.init()
+        return wp
+    with _stderr_without(_CUDA_DRIVER_WARNING):
+        wp.init()
     return wp
+
+
+@contextlib.contextmanager
+def _stderr_without(marker: str):
+    """Capture file descriptor 2 (native code writes there, not to sys.stderr) and pass on
+    every line but those containing `marker`."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no file descriptor 2: nothing to filter
+        yield
+        return
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            kept = [line for line in tmp.read().splitlines(keepends=True) if marker.encode() not in line]
+            if kept:
+                os.write(2, b"".join(kept))
 
 
 def make_integrator(scene: Scene, config: RenderConfig):
@@ -105,6 +146,10 @@ def make_integrator(scene: Scene, config: RenderConfig):
     if fixed is not None and config.max_depth not in (None, fixed):
         raise ConfigError(f"method '{config.method}' computes max_depth {fixed} (direct illumination) only")
     max_depth = fixed or (config.max_depth if config.max_depth is not None else scene.max_depth)
+    notes = []
+    if fixed is not None and config.max_depth is None and scene.max_depth != fixed:
+        notes.append(f"method '{config.method}' renders max_depth {fixed} (the only depth it computes), "
+                     f"not the scene's max_depth {scene.max_depth}")
     settings.update(seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
                     camera_motion=config.camera_motion, camera_speed=config.camera_speed,
                     rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
@@ -116,6 +161,7 @@ def make_integrator(scene: Scene, config: RenderConfig):
         raise ConfigError(str(e)) from None
     integ = cls(dscene, settings, config.device, config.slices)
     integ.reverse_launch = config.debug_reverse_launch
+    integ.notes.extend(notes)
     return integ
 
 
@@ -126,7 +172,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
     """
     config = config or RenderConfig()
     config.validate()
-    wp = _init_warp()
+    wp = _init_warp(config.device)
     if config.device.startswith("cuda") and wp.get_cuda_device_count() == 0:
         raise ConfigError(f"device '{config.device}' is not available: no CUDA device on this machine")
     try:

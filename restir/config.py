@@ -62,7 +62,8 @@ def parse_value(text: str, like):
         if isinstance(like, float):
             return float(text)
     except ValueError:
-        raise ConfigError(f"'{text}' is not a {type(like).__name__}") from None
+        name = type(like).__name__
+        raise ConfigError(f"'{text}' is not {'an' if name[0] in 'aeiou' else 'a'} {name}") from None
     return text
 
 

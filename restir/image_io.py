@@ -1,4 +1,7 @@
-"""EXR / PNG input and output (linear float RGB arrays of shape (H, W, 3))."""
+"""EXR / PNG / NumPy input and output (linear float RGB arrays of shape (H, W, 3)).
+
+Output formats follow the file's extension (`IMAGE_FORMATS`); `write_image` refuses others.
+"""
 import os
 
 import numpy as np
@@ -54,10 +57,38 @@ def write_png(path: str, rgb: np.ndarray, exposure: float = 0.0) -> None:
     Image.fromarray((linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)).save(path)
 
 
+# Extension -> what write_image writes there.
+IMAGE_FORMATS = {
+    ".exr": "OpenEXR, linear float RGB",
+    ".png": "PNG, tonemapped sRGB (8 bits, with the exposure)",
+    ".jpg": "JPEG, tonemapped sRGB",
+    ".jpeg": "JPEG, tonemapped sRGB",
+    ".npy": "NumPy array, float32 linear RGB of shape (H, W, 3)",
+}
+LDR_FORMATS = (".png", ".jpg", ".jpeg")
+
+
+def image_format(path: str) -> str:
+    """The output format's extension ('.exr', ...); ValueError for one write_image cannot write."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in IMAGE_FORMATS:
+        raise ValueError(f"unsupported extension '{ext}' (use {', '.join(IMAGE_FORMATS)})" if ext else
+                         f"no extension to choose the format by (use {', '.join(IMAGE_FORMATS)})")
+    return ext
+
+
+def write_npy(path: str, rgb: np.ndarray) -> None:
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    np.save(path, np.ascontiguousarray(rgb, dtype=np.float32))
+
+
 def write_image(path: str, rgb: np.ndarray, exposure: float = 0.0) -> None:
-    if path.lower().endswith(".exr"):
+    """Write `rgb` in the format of the path's extension (IMAGE_FORMATS); the exposure applies
+    to the tonemapped 8-bit formats only."""
+    ext = image_format(path)
+    if ext == ".exr":
         write_exr(path, rgb)
-    elif path.lower().endswith((".png", ".jpg", ".jpeg")):
-        write_png(path, rgb, exposure)
+    elif ext == ".npy":
+        write_npy(path, rgb)
     else:
-        raise ValueError(f"unknown image format for '{path}' (use .exr or .png)")
+        write_png(path, rgb, exposure)

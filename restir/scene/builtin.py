@@ -10,6 +10,13 @@
   pixel's value is 1 - 0.5^max_depth (1 for unbounded depth).
 - `sphere-cap`: TESTING.md A1: a closed diffuse sphere whose emissive cap covers a fraction
   `phi` of its area; every non-emitting point has the same radiance (see `sphere_cap_radiance`).
+
+The two closed spheres default to max_depth ANALYTIC_MAX_DEPTH = 64, not unbounded: no path
+ever escapes them and Russian roulette is off by default, so unbounded depth means 1023 bounces
+for every path (tens of seconds at 128x128 x 8 spp on the CPU). At albedo 0.5 the truncation
+drops a fraction 0.5^64 of the furnace's value and 0.5^63 of the cap sphere's, far below float32
+precision; the analytic values for any depth are the formulas above. Pass max_depth=-1 (or
+--max-depth -1) for unbounded depth.
 """
 import math
 
@@ -114,13 +121,21 @@ def _scaled_quad(quad, s):
     return list(c + (q - c) * s)
 
 
-def furnace(width=32, height=32, spp=16, max_depth=-1, albedo=0.5, radiance=0.5) -> dict:
+ANALYTIC_MAX_DEPTH = 64  # default max_depth of the closed spheres (see the module docstring)
+
+
+def furnace(width=32, height=32, spp=16, max_depth=ANALYTIC_MAX_DEPTH, albedo=0.5, radiance=0.5) -> dict:
+    """Closed emitting sphere: L = radiance * (1 - albedo^max_depth) / (1 - albedo) everywhere
+    (1 - 0.5^64 at the defaults; max_depth=-1: unbounded, L = 1)."""
     return sphere_cap(width, height, spp, max_depth, albedo, radiance, phi=1.0)
 
 
-def sphere_cap(width=32, height=32, spp=16, max_depth=-1, albedo=0.5, radiance=1.0, phi=0.05,
+def sphere_cap(width=32, height=32, spp=16, max_depth=ANALYTIC_MAX_DEPTH, albedo=0.5, radiance=1.0, phi=0.05,
                segments=128) -> dict:
-    """Unit sphere seen from inside; the cap z > 1 - 2 phi emits `radiance` (phi = 1: all)."""
+    """Unit sphere seen from inside; the cap z > 1 - 2 phi emits `radiance` (phi = 1: all).
+
+    max_depth defaults to 64 (the truncation drops albedo^63 of the unbounded radiance;
+    `sphere_cap_radiance` gives the value for any depth); -1 is unbounded."""
     cam = _look_at([0, 0, 0.5], [0, 0, -1], [0, 1, 0])  # looks away from the cap
     bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [albedo] * 3}}
     emit = {"type": "area", "radiance": {"type": "rgb", "value": [radiance] * 3}}
@@ -214,6 +229,18 @@ BUILTINS = {
     "furnace": furnace,
     "sphere-cap": sphere_cap,
     "many-lights": many_lights,
+}
+
+
+# One line each, for `restir render --help`.
+BUILTIN_DESCRIPTIONS = {
+    "cornell-box": "the Cornell box (measured geometry, RGB materials), 512x512, 16 spp, unbounded depth",
+    "cornell-box-glossy": "the Cornell box with a rough-conductor tall block and Beckmann back wall",
+    "furnace": f"closed emitting sphere, albedo 0.5: every pixel 1 - 0.5^max_depth; max_depth "
+               f"{ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH}; -1: unbounded, 1)",
+    "sphere-cap": f"closed diffuse sphere lit by an emissive cap (TESTING.md A1), analytic radiance; "
+                  f"max_depth {ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH - 1}; -1: unbounded)",
+    "many-lights": "the Cornell room lit by 400 small coloured emitters (ReSTIR DI's benchmark)",
 }
 
 

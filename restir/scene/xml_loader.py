@@ -12,7 +12,7 @@ import xml.parsers.expat
 import numpy as np
 
 from . import transforms
-from .errors import SceneError
+from .errors import SceneError, warn
 
 OBJECT_TAGS = {"bsdf", "shape", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture"}
 PARAM_TAGS = {"float", "integer", "boolean", "string", "rgb", "spectrum", "point", "vector", "transform", "ref"}
@@ -71,6 +71,7 @@ class _Reader:
         self.path = path
         self.defines = dict(defines)   # command-line values win over <default>
         self.cli_defines = set(defines)
+        self.used: set[str] = set()    # names substituted somewhere ($name)
         self.ids: dict[str, dict] = {}
         self.auto = 0
 
@@ -88,6 +89,7 @@ class _Reader:
             key = m.group(1)
             if key not in self.defines:
                 raise SceneError(f"undefined parameter '${key}' (add <default name=\"{key}\"> or -D {key}=...)", self.loc(node))
+            self.used.add(key)
             return self.defines[key]
 
         return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", sub, value)
@@ -228,6 +230,8 @@ def load_xml(path: str, defines: dict[str, str] | None = None) -> dict:
         raise SceneError(f"the root element must be <scene>, not <{root.tag}>", reader.loc(root))
     scene = {"type": "scene", "_loc": reader.loc(root), "_kind": "scene"}
     reader.fill(scene, root)
+    for name in sorted(reader.cli_defines - reader.used):  # a typo, or a scene without that parameter
+        warn(f"-D {name}={reader.defines[name]}: the scene never uses '{name}' (no ${name} in it)", path)
     scene["_ids"] = reader.ids
     scene["_base_dir"] = os.path.dirname(path)
     return scene

@@ -5,6 +5,7 @@ its statistic is its own average image over T frames (pixels and frames within o
 correlated through reuse and never treated as independent samples).
 """
 import copy
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,29 +67,59 @@ class IndependentRuns:
             self.batch_excess_kurtosis = np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
 
 
+DEFAULT_MAX_MDB = 0.05  # a pass must rule out relative biases above 5% (restir validate --max-mdb)
+
+
 @dataclass
 class Validation:
     report: RGBZTest
     tested: IndependentRuns
     reference: IndependentRuns
+    max_mdb: float = DEFAULT_MAX_MDB  # the largest minimum detectable bias a pass may have (a fraction)
 
     @property
     def verdict(self) -> str:
-        """"pass", "fail", or "inconclusive" (pixel statistics too skewed to judge and no failure
-        at the image or tile level)."""
-        if self.report.passed:
-            conclusive = all(r.pixel_conclusive for r in self.report.reports)
-            return "pass" if conclusive else "inconclusive"
-        return "fail"
+        """"pass", "fail", or "inconclusive": no failure, but either the pixel statistics are too
+        skewed to judge, or the test could not have detected a bias of `max_mdb` (its minimum
+        detectable bias, at 80% power, is larger). A detected bias fails whatever the MDB."""
+        if not self.report.passed:
+            return "fail"
+        return "pass" if self.reason is None else "inconclusive"
+
+    @property
+    def reason(self) -> str | None:
+        """Why a verdict without failure is not a pass (None when it is)."""
+        if not self.report.passed:
+            return None
+        if not all(r.pixel_conclusive for r in self.report.reports):
+            return "pixel statistics too skewed to judge"
+        mdb = self.report.mdb
+        if not mdb <= self.max_mdb:  # also NaN
+            need = self.runs_needed
+            more = f"; about {need} runs would bring it there" if need else ""
+            return (f"minimum detectable bias {100 * mdb:.3g}% is above the bound {100 * self.max_mdb:.3g}%: "
+                    f"a bias that size could have gone unseen{more}")
+        return None
+
+    @property
+    def runs_needed(self) -> int | None:
+        """Runs that would bring the MDB to `max_mdb` with the same frames and spp (both sides
+        scaled alike): the MDB falls as 1/sqrt(runs), so runs * (mdb / max_mdb)^2, rounded up
+        (at least the runs made). None when the MDB is not finite."""
+        mdb, runs = self.report.mdb, self.tested.frames
+        if not (math.isfinite(mdb) and self.max_mdb > 0):
+            return None
+        return max(runs, math.ceil(runs * (mdb / self.max_mdb) ** 2))
 
     def zmap(self) -> np.ndarray:
         return self.report.zmap()
 
 
 def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, reference_runs: int | None = None,
-             tile: int = 8, alpha: float = 1e-3) -> Validation:
-    """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2)."""
+             tile: int = 8, alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB) -> Validation:
+    """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2);
+    a pass needs a minimum detectable bias of at most `max_mdb` (see Validation.verdict)."""
     tested = IndependentRuns(scene, config, runs, seed0=1000)
     ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000)
     rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
-    return Validation(rep, tested, ref)
+    return Validation(rep, tested, ref, max_mdb)

@@ -19,9 +19,9 @@ import pytest
 import restir
 from restir.image_io import read_exr
 from tests.integration.test_path_tracer import check
+from tests.shared_scenes import scene_path
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"
-SHARED = pathlib.Path(__file__).resolve().parents[3] / "shared" / "scenes"
 FRAMES = 32
 SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256}
 MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01}
@@ -31,8 +31,9 @@ MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "featu
 @pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features"])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
-    if not meta_path.exists() or (name != "features" and not SHARED.exists()):
-        pytest.skip("references or shared scenes missing")
+    if not meta_path.exists():
+        pytest.skip(f"reference {meta_path} missing")
+    scene_file = None if name == "features" else scene_path(name)  # skips when the shared scenes are missing
     meta = json.loads(meta_path.read_text())
     ref, ref_var = read_exr(str(DATA / f"{name}.mean.exr")), read_exr(str(DATA / f"{name}.var.exr"))
     if name == "features":
@@ -40,7 +41,7 @@ def test_path_tracer_matches_mitsuba(device, name, tmp_path):
 
         scene = restir.load_scene(write_feature_scene(str(tmp_path)))
     else:
-        scene = restir.load_scene(str(SHARED / name / "scene.xml"))
+        scene = restir.load_scene(str(scene_file))
     cfg = restir.RenderConfig(spp=SPP[name], frames=FRAMES, width=meta["resx"], height=meta["resy"],
                               max_depth=meta["max_depth"], seed=11, device=device)
     r = restir.render(scene, cfg)

@@ -200,8 +200,11 @@ def test_temporal_reuse_matches_direct_path_tracing(name, config, tmp_path):
     settings = {"candidates": 1 if name == "half-dark" else 4, "temporal": True, "temporal.cap": t["cap"],
                 "spatial.rounds": t["rounds"], "visibility": visibility,
                 "candidates.bsdf": 1 if visibility == "reuse" else 0}
-    di = independent_runs(scene, "restir-di", runs=24, frames=8, spp=1, settings=settings)
-    pt = independent_runs(scene, "pt", runs=24, frames=8, spp=4, seed0=500)
+    # with spatial reuse in the default radius (2 px at this size) the image mean varies more from
+    # run to run than with the old 30 px (which averaged over the whole 24x24 image): more runs
+    runs = 32 if t["rounds"] else 24
+    di = independent_runs(scene, "restir-di", runs=runs, frames=8, spp=1, settings=settings)
+    pt = independent_runs(scene, "pt", runs=runs, frames=8, spp=4, seed0=500)
     print(name, config)
     rep = check(di, pt.image, pt.batch_variance_of_mean, other=pt, tile=4)
     assert rep.mdb < 0.05
@@ -290,12 +293,9 @@ def test_default_restir_di_on_shared_scenes(name):
     """Default ReSTIR DI (32 light + 1 BSDF candidates, visibility-aware reuse, temporal cap 5,
     3 neighbours x 2 rounds in the default radius) against direct
     path tracing on the shared scenes, 32 independent runs x 8 frames at 32x32."""
-    import pathlib
+    from tests.shared_scenes import scene_path
 
-    shared = pathlib.Path(__file__).resolve().parents[3] / "shared" / "scenes" / name / "scene.xml"
-    if not shared.exists():
-        pytest.skip("shared scenes missing")
-    scene = restir.load_scene(str(shared))
+    scene = restir.load_scene(str(scene_path(name)))
     spp_di, spp_pt = SHARED[name]
     di = independent_runs(scene, "restir-di", runs=32, frames=8, spp=spp_di, size=32)
     pt = independent_runs(scene, "pt", runs=32, frames=8, spp=spp_pt, size=32, seed0=500)

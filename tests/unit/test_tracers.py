@@ -3,8 +3,6 @@
 Embree traces on the CPU only, so its side always runs there; Warp's side runs on the device
 under test (`pytest --device cuda`: Warp's CUDA BVH against Embree).
 """
-import pathlib
-
 import numpy as np
 import pytest
 import warp as wp
@@ -14,8 +12,8 @@ from restir.device.intersect import is_visible, trace_closest
 from restir.device.scene_device import SceneDevice
 from restir.embree import library
 from restir.scene.upload import DeviceScene
+from tests.shared_scenes import scene_path
 
-SHARED = pathlib.Path(__file__).resolve().parents[3] / "shared" / "scenes"
 
 
 @wp.kernel
@@ -52,9 +50,7 @@ def camera_like_rays(scene, n, rng):
 def test_embree_and_warp_agree(spec, device):
     wp.init()
     if not spec.startswith("builtin:"):
-        if not SHARED.exists():
-            pytest.skip("shared scenes missing")
-        spec = str(SHARED / spec / "scene.xml")
+        spec = str(scene_path(spec))
     scene = restir.load_scene(spec)
     rng = np.random.default_rng(0)
     o, d = camera_like_rays(scene, 200_000, rng)
