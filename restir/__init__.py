@@ -1,6 +1,6 @@
 """restir: a research renderer for resampled path tracing on NVIDIA Warp.
 
-Public API: `load_scene`, `render`, `RenderConfig`, `RenderResult`.
+Public API: `load_scene`, `render`, `write_image`, `RenderConfig`, `RenderResult`.
 """
 import os as _os
 
@@ -13,9 +13,10 @@ if _os.environ.get("RESTIR_WARP_VERBOSE", "").strip().lower() not in ("1", "true
 # No kernel is differentiated: skip adjoint code generation (halves compile times).
 _wp.config.enable_backward = False
 
-from .api import RenderResult, load_scene, render
+from .api import RenderResult, load_scene, render, write_image
 from .config import ConfigError, RenderConfig
 from .scene.errors import SceneError, SceneWarning
 
-__all__ = ["load_scene", "render", "RenderConfig", "RenderResult", "SceneError", "SceneWarning", "ConfigError"]
+__all__ = ["load_scene", "render", "write_image", "RenderConfig", "RenderResult", "SceneError", "SceneWarning",
+           "ConfigError"]
 __version__ = "0.1.0"

@@ -1,16 +1,23 @@
 """Python API: load a scene, render it with a method, get numpy images and stats back.
 
     import restir
-    scene = restir.load_scene("builtin:cornell-box")
-    result = restir.render(scene, restir.RenderConfig(method="pt", spp=64))
+    scene = restir.load_scene("scene.xml", spp=64, res=256)   # as mi.load_file(path, **params)
+    scene = restir.load_scene("builtin:cornell-box", width=128)
+    result = restir.render(scene, method="restir-di", spp=1, frames=16)   # RenderConfig fields
     result.image        # (H, W, 3) float32, linear RGB, mean over frames
     result.stats        # per-stage ms, rays/s, bytes per pixel, ...
+    restir.write_image("out.exr", result)                     # .exr, .png, .jpg, .npy
 """
 import contextlib
 import copy
+import dataclasses
+import inspect
+import io
 import os
+import signal
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 
@@ -18,21 +25,54 @@ import numpy as np
 
 from .config import ConfigError, RenderConfig, method_settings
 from .film import PixelMoments
-from .scene.builtin import builtin_scene
+from .scene.builtin import BUILTINS, builtin_scene
 from .scene.errors import SceneError
 from .scene.scene import Scene, build_scene
 from .scene.upload import DeviceScene
 from .scene.xml_loader import load_xml
 
 
-def load_scene(spec: str, defines: dict[str, str] | None = None, **builtin_args) -> Scene:
-    """`builtin:NAME` (keyword arguments go to the builtin) or a Mitsuba 3 XML file path."""
+def _define_value(v) -> str:
+    """A parameter value as Mitsuba's XML substitution takes it (numbers or strings)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float, str, np.integer, np.floating)):
+        return str(v)
+    raise SceneError(f"parameter value {v!r} is not a number or a string")
+
+
+def load_scene(spec, defines: dict | None = None, **params) -> Scene:
+    """Load a scene, the way Mitsuba 3's loaders are called.
+
+    - a Mitsuba 3 XML file: keyword parameters set its `<default name=...>` values, as
+      `mi.load_file(path, **params)` does (`load_scene("scene.xml", spp=64, res=256)`); numbers or
+      strings. A parameter the scene never uses is an error (a misspelling would otherwise be
+      ignored). `defines` is the same as a dict (the CLI's -D: there an unused name only warns).
+    - `builtin:NAME`: keyword arguments go to the builtin (`width=`, `height=`, `spp=`, ...;
+      `restir render --help` lists the builtins).
+    - a dict: a scene in `mi.load_dict`'s form ({"type": "scene", "sensor": {...}, ...}).
+    """
+    if isinstance(spec, dict):
+        if defines or params:
+            raise SceneError("parameters apply to XML files and builtins; put the values in the dict")
+        return build_scene(copy.deepcopy(spec), str(spec.get("id", "dict-scene")))
+    if not isinstance(spec, (str, os.PathLike)):
+        raise SceneError(f"a scene is an XML path, 'builtin:NAME' or a dict, not {type(spec).__name__}")
+    spec = os.fspath(spec)
     if spec.startswith("builtin:"):
         name = spec.split(":", 1)[1]
         if defines:
             raise SceneError("-D defines apply to XML scenes only", spec)
-        return build_scene(builtin_scene(name, **builtin_args), name)
-    return build_scene(load_xml(spec, defines), spec)
+        if name in BUILTINS:
+            accepted = inspect.signature(BUILTINS[name]).parameters
+            if not any(p.kind == p.VAR_KEYWORD for p in accepted.values()):
+                unknown = sorted(set(params) - set(accepted))
+                if unknown:
+                    raise SceneError(f"unknown parameter(s) {', '.join(unknown)} (builtin:{name} takes "
+                                     f"{', '.join(accepted)})", spec)
+        return build_scene(builtin_scene(name, **params), name)
+    merged = {k: _define_value(v) for k, v in {**(defines or {}), **params}.items()}
+    return build_scene(load_xml(spec, merged, required=set(params)), spec)
 
 
 @dataclass
@@ -43,6 +83,24 @@ class RenderResult:
     stats: dict
     frame_sums: np.ndarray | None = None  # (4, H, W, 3): sums of frame means^1..^4 (float64)
     frame_images: np.ndarray | None = None  # (F, H, W, 3) when RenderConfig.keep_frames
+
+    def __repr__(self) -> str:
+        st = self.stats
+        mean = ", ".join(f"{v:.4g}" for v in self.image.reshape(-1, 3).mean(axis=0))
+        return (f"RenderResult({st.get('method')} on {st.get('scene')}: {st.get('width')}x{st.get('height')}, "
+                f"{st.get('spp_per_frame')} spp x {st.get('frames')} frames, {st.get('total_ms', 0.0):.0f} ms, "
+                f"mean RGB ({mean}))")
+
+    def _repr_png_(self) -> bytes:
+        """Inline preview in notebooks: the image tonemapped to sRGB (exposure 0)."""
+        from PIL import Image
+
+        from .image_io import linear_to_srgb
+
+        x = np.nan_to_num(np.clip(self.image, 0.0, 1.0))
+        buf = io.BytesIO()
+        Image.fromarray((linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)).save(buf, format="PNG")
+        return buf.getvalue()
 
     @property
     def batches(self) -> np.ndarray | None:
@@ -94,6 +152,37 @@ class RenderResult:
 # Printed by Warp's native library (cuda_util.cpp, straight to file descriptor 2) on every
 # wp.init() of a machine without the CUDA driver; no Warp setting silences it.
 _CUDA_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
+
+
+class RenderInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a render between frames. `result` holds the average of the frames that
+    finished (stats["interrupted"] is True), or None when none had."""
+
+    def __init__(self, result):
+        super().__init__("render interrupted")
+        self.result = result
+
+
+@contextlib.contextmanager
+def _sigint_between_frames(requested: list):
+    """While rendering, Ctrl-C asks the frame loop to stop after the frame in flight instead of
+    raising inside a launch: Warp's CPU kernels run on worker threads that a KeyboardInterrupt
+    cannot stop, and unwinding past them crashed the interpreter at exit. A second Ctrl-C
+    raises at once. (Only the main thread can own the handler; elsewhere nothing changes.)"""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        if requested:
+            raise KeyboardInterrupt
+        requested.append(True)
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _init_warp(device: str = "cpu"):
@@ -165,12 +254,22 @@ def make_integrator(scene: Scene, config: RenderConfig):
     return integ
 
 
-def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> RenderResult:
+def render(scene: Scene, config: RenderConfig | None = None, progress=None, **settings) -> RenderResult:
     """Render `config.frames` frames and return their average with stats.
 
-    `progress`, if given, is called as progress(frames_done, frames_total) after each frame.
+    The common settings may be given as keywords instead of a RenderConfig, or on top of one:
+    `render(scene, method="restir-di", spp=1, frames=16, seed=3, settings={"candidates": 8})`
+    (the fields of RenderConfig; an unknown keyword is an error). `progress`, if given, is called
+    as progress(frames_done, frames_total) after each frame.
     """
     config = config or RenderConfig()
+    if settings:
+        fields = {f.name for f in dataclasses.fields(RenderConfig)}
+        unknown = sorted(set(settings) - fields)
+        if unknown:
+            raise ConfigError(f"unknown render setting(s) {', '.join(unknown)} (known: {', '.join(sorted(fields))}; "
+                              "method settings go in settings={...})")
+        config = dataclasses.replace(config, **settings)
     config.validate()
     wp = _init_warp(config.device)
     if config.device.startswith("cuda") and wp.get_cuda_device_count() == 0:
@@ -184,28 +283,48 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None) -> R
         scene.camera = copy.copy(scene.camera)
         scene.camera.width = config.width or scene.camera.width
         scene.camera.height = config.height or scene.camera.height
-    t_setup = time.perf_counter()
-    integ = make_integrator(scene, config)
-    setup_ms = (time.perf_counter() - t_setup) * 1e3
-    h, w = integ.height, integ.width
-    moments = PixelMoments((h, w, 3))
-    frame_sums = np.zeros((4, h, w, 3))
-    frames = [] if config.keep_frames else None
-    spp = integ.settings["spp"]
-    t0 = time.perf_counter()
-    for f in range(config.frames):
-        mean, var = integ.render_frame(f)
-        moments.add(mean, var, spp)
-        m = mean.astype(np.float64)
-        frame_sums += (m, m ** 2, m ** 3, m ** 4)
-        if frames is not None:
-            frames.append(mean.astype(np.float32))
-        if progress:
-            progress(f + 1, config.frames)
+    stop: list = []
+    with _sigint_between_frames(stop):
+        t_setup = time.perf_counter()
+        integ = make_integrator(scene, config)
+        setup_ms = (time.perf_counter() - t_setup) * 1e3
+        h, w = integ.height, integ.width
+        moments = PixelMoments((h, w, 3))
+        frame_sums = np.zeros((4, h, w, 3))
+        frames = [] if config.keep_frames else None
+        spp = integ.settings["spp"]
+        t0 = time.perf_counter()
+        done = 0
+        for f in range(config.frames):
+            if stop:
+                break
+            mean, var = integ.render_frame(f)
+            moments.add(mean, var, spp)
+            m = mean.astype(np.float64)
+            frame_sums += (m, m ** 2, m ** 3, m ** 4)
+            if frames is not None:
+                frames.append(mean.astype(np.float32))
+            done += 1
+            if progress:
+                progress(f + 1, config.frames)
+    stopped = bool(stop) and done < config.frames  # a Ctrl-C during the last frame stops nothing
+    if stopped and done == 0:
+        raise RenderInterrupted(None)
     total_ms = (time.perf_counter() - t0) * 1e3
     stats = {"scene": scene.name, "method": config.method, "width": w, "height": h, "spp_per_frame": spp,
-             "frames": config.frames, **integ.stats(), "total_ms": total_ms, "setup_ms": setup_ms,
-             "triangles": scene.num_triangles}
-    stats["ms_per_frame"] = stats["stage_total_ms"] / config.frames
-    return RenderResult(moments.mean.astype(np.float32), moments.variance, moments.n, stats, frame_sums,
-                        np.stack(frames) if frames is not None else None)
+             "frames": done, **integ.stats(), "total_ms": total_ms, "setup_ms": setup_ms,
+             "triangles": scene.num_triangles, "interrupted": stopped}
+    stats["ms_per_frame"] = stats["stage_total_ms"] / done
+    result = RenderResult(moments.mean.astype(np.float32), moments.variance, moments.n, stats, frame_sums,
+                          np.stack(frames) if frames is not None else None)
+    if stopped:
+        raise RenderInterrupted(result)
+    return result
+
+
+def write_image(path: str, image, exposure: float = 0.0) -> None:
+    """Write an image (an (H, W, 3) array or a RenderResult) in the format of the path's
+    extension: .exr (linear float), .png / .jpg (tonemapped sRGB, `exposure` in stops), .npy."""
+    from .image_io import write_image as _write
+
+    _write(os.fspath(path), np.asarray(getattr(image, "image", image), dtype=np.float32), exposure)

@@ -249,7 +249,17 @@ def _render(args) -> int:
     with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True) as bar:
         task = bar.add_task(f"{config.method} frames", total=config.frames)
-        result = api.render(scene, config, progress=lambda done, total: bar.update(task, completed=done))
+        try:
+            result = api.render(scene, config, progress=lambda done, total: bar.update(task, completed=done))
+        except api.RenderInterrupted as e:
+            result = e.result
+    if result is None:
+        print("interrupted before the first frame finished: nothing written", file=sys.stderr)
+        return 130
+    interrupted = result.stats.get("interrupted", False)
+    if interrupted:
+        print(f"interrupted after {result.frames} finished frame(s) of {config.frames}: writing their average",
+              file=sys.stderr)
     _write(output, write_image, result.image, args.exposure)
     written = [output]
     if args.png:
@@ -278,7 +288,7 @@ def _render(args) -> int:
                   f"{st['bytes_per_pixel']['total']:.0f} bytes/pixel in render buffers")
     for path in written:
         console.print(f"wrote {escape(path)}", highlight=False, soft_wrap=True)
-    return 0
+    return 130 if interrupted else 0
 
 
 def _validate(args) -> int:

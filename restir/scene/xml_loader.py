@@ -221,8 +221,10 @@ class _Reader:
                 value.setdefault("_loc", loc)
 
 
-def load_xml(path: str, defines: dict[str, str] | None = None) -> dict:
-    """Parse a Mitsuba 3 XML file into a scene dict (see module docstring)."""
+def load_xml(path: str, defines: dict[str, str] | None = None, required: set[str] | frozenset = frozenset()) -> dict:
+    """Parse a Mitsuba 3 XML file into a scene dict (see module docstring). A define the scene
+    never uses is a warning, or an error for the names in `required` (the Python API's keyword
+    parameters: a misspelt one would otherwise be silently ignored)."""
     path = os.path.abspath(path) if not os.path.isabs(path) else path
     root = _parse_xml(path)
     reader = _Reader(path, defines or {})
@@ -231,6 +233,9 @@ def load_xml(path: str, defines: dict[str, str] | None = None) -> dict:
     scene = {"type": "scene", "_loc": reader.loc(root), "_kind": "scene"}
     reader.fill(scene, root)
     for name in sorted(reader.cli_defines - reader.used):  # a typo, or a scene without that parameter
+        if name in required:
+            raise SceneError(f"parameter {name}={reader.defines[name]!r}: the scene never uses '{name}' "
+                             f"(no ${name} in it; its parameters are its <default> names)", path)
         warn(f"-D {name}={reader.defines[name]}: the scene never uses '{name}' (no ${name} in it)", path)
     scene["_ids"] = reader.ids
     scene["_base_dir"] = os.path.dirname(path)
