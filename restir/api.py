@@ -224,7 +224,7 @@ def _stderr_without(marker: str):
                 os.write(2, b"".join(kept))
 
 
-def make_integrator(scene: Scene, config: RenderConfig):
+def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
     from .integrators import METHODS
 
     if config.method not in METHODS:
@@ -248,19 +248,22 @@ def make_integrator(scene: Scene, config: RenderConfig):
         dscene = DeviceScene(scene, config.device, config.tracer)
     except RuntimeError as e:
         raise ConfigError(str(e)) from None
-    integ = cls(dscene, settings, config.device, config.slices)
+    integ = cls(dscene, settings, config.device, config.slices, on_compile=on_compile)
     integ.reverse_launch = config.debug_reverse_launch
     integ.notes.extend(notes)
     return integ
 
 
-def render(scene: Scene, config: RenderConfig | None = None, progress=None, **settings) -> RenderResult:
+def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_compile=None,
+           **settings) -> RenderResult:
     """Render `config.frames` frames and return their average with stats.
 
     The common settings may be given as keywords instead of a RenderConfig, or on top of one:
     `render(scene, method="restir-di", spp=1, frames=16, seed=3, settings={"candidates": 8})`
     (the fields of RenderConfig; an unknown keyword is an error). `progress`, if given, is called
-    as progress(frames_done, frames_total) after each frame.
+    as progress(frames_done, frames_total) after each frame, and with fractional frames_done as
+    a frame's samples finish. `on_compile`, if given, is called (no arguments) when loading the
+    kernels takes long: they are being compiled, which happens once per configuration.
     """
     config = config or RenderConfig()
     if settings:
@@ -286,7 +289,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, **se
     stop: list = []
     with _sigint_between_frames(stop):
         t_setup = time.perf_counter()
-        integ = make_integrator(scene, config)
+        integ = make_integrator(scene, config, on_compile)
         setup_ms = (time.perf_counter() - t_setup) * 1e3
         h, w = integ.height, integ.width
         moments = PixelMoments((h, w, 3))
@@ -295,6 +298,8 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, **se
         spp = integ.settings["spp"]
         t0 = time.perf_counter()
         done = 0
+        if progress:
+            integ.on_samples = lambda n, spp: progress(done + n / spp, config.frames)
         for f in range(config.frames):
             if stop:
                 break

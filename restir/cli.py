@@ -250,7 +250,9 @@ def _render(args) -> int:
                   TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True) as bar:
         task = bar.add_task(f"{config.method} frames", total=config.frames)
         try:
-            result = api.render(scene, config, progress=lambda done, total: bar.update(task, completed=done))
+            result = api.render(scene, config, progress=lambda done, total: bar.update(task, completed=done),
+                                on_compile=lambda: console.print("compiling kernels (once per configuration; "
+                                                                 "later runs load them from Warp's cache)..."))
         except api.RenderInterrupted as e:
             result = e.result
     if result is None:

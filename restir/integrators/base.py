@@ -8,12 +8,17 @@
 A method lists its STAGES and KERNELS, implements `allocate` and `render_frame` (a flat table of
 contents of stage calls) and returns each frame's per-pixel mean and variance.
 """
+import threading
+
 import numpy as np
 import warp as wp
 
 from ..parallel import launch_pixels
 from ..timing import BufferRegistry, StageTimer
 from .common.events import COUNTER_NAMES, EV_RAYS
+
+
+COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
 
 
 class Integrator:
@@ -23,7 +28,9 @@ class Integrator:
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
 
-    def __init__(self, dscene, settings: dict, device: str, slices: int | None = None):
+    def __init__(self, dscene, settings: dict, device: str, slices: int | None = None, on_compile=None):
+        """on_compile: called with no argument when loading the kernels takes long (they are
+        being compiled: the first run of a configuration; later runs load them from Warp's cache)."""
         self.dscene = dscene
         self.settings = settings
         self.device = wp.get_device(device)
@@ -39,10 +46,19 @@ class Integrator:
         self.reverse_launch = False  # debug: slices in reverse order (see parallel.launch_pixels)
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
+        self.on_samples = None  # progress hook within a frame: on_samples(samples_done, spp), if set
         self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into counters
         self.allocate()
-        for k in self.kernels():
-            wp.load_module(k.module, device=self.device)
+        timer = threading.Timer(COMPILE_NOTICE_S, on_compile) if on_compile is not None else None
+        if timer is not None:
+            timer.daemon = True
+            timer.start()
+        try:
+            for k in self.kernels():
+                wp.load_module(k.module, device=self.device)
+        finally:
+            if timer is not None:
+                timer.cancel()
 
     def kernels(self) -> tuple:
         """The kernels this configuration launches (compiled before the first frame)."""

@@ -1,8 +1,9 @@
 """Reference path tracer: NEE and BSDF sampling combined with the balance heuristic.
 
 Stage `path_trace` (one kernel): reads the scene and camera; writes `frame_mean` and
-`frame_var` (per-pixel mean and variance of this frame's spp samples, by Welford's update:
-a second moment minus the squared mean would cancel catastrophically in float32).
+`frame_m2` (per-pixel mean and sum of squared deviations of this frame's spp samples, by
+Welford's update: a second moment minus the squared mean would cancel catastrophically in
+float32). A frame is one launch, or several over consecutive samples when progress is shown.
 `max_depth` has Mitsuba's meaning (number of path segments; 1 = directly visible emission,
 2 = direct illumination, -1 = unbounded up to MAX_SEGMENTS). Russian roulette (Mitsuba's rule,
 off by default) starts at `rr_depth`. `strategy` selects MIS (default), NEE-only or BSDF-only,
@@ -41,6 +42,8 @@ class PTParams:
     seed: wp.uint32
     frame: wp.uint32
     spp: int
+    sample_begin: int  # this launch renders samples [sample_begin, sample_end) of the frame's spp
+    sample_end: int
     max_depth: int
     rr_depth: int
     use_rr: int
@@ -147,22 +150,29 @@ def make_path_trace_kernel(several_light_samples: bool):
         camera: Camera,
         params: PTParams,
         frame_mean: wp.array(dtype=wp.vec3),
-        frame_var: wp.array(dtype=wp.vec3),
+        frame_m2: wp.array(dtype=wp.vec3),
         events: wp.array(dtype=wp.vec4i),
     ):
         pixel = wp.tid() + offset
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
         acc = Welford()
+        if params.sample_begin > 0:  # a later part of the frame: resume the pixel's running moments
+            acc.mean = frame_mean[pixel]
+            acc.m2 = frame_m2[pixel]
+            acc.n = params.sample_begin
         rays = int(0)
-        for s in range(params.spp):
+        for s in range(params.sample_begin, params.sample_end):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
             ray = camera_ray(camera, params.seed, params.frame, pixel, s)
             res = path_radiance(scene, params, ray.o, ray.d, wp.uint32(pixel), key, base)
             rays += res.rays
             acc = welford_add(acc, res.L * ray.weight)
         frame_mean[pixel] = acc.mean
-        frame_var[pixel] = acc.m2 / float(params.spp)
-        events[pixel] = output_events(acc.mean, rays)
+        frame_m2[pixel] = acc.m2
+        if params.sample_end == params.spp:
+            events[pixel] = output_events(acc.mean, rays)
+        else:
+            events[pixel] = output_events(wp.vec3(0.0), rays)
 
     return path_trace_kernel
 
@@ -188,7 +198,7 @@ class PathTracer(Integrator):
 
     def allocate(self) -> None:
         self.frame_mean = self.buffer("frame_mean", wp.vec3)
-        self.frame_var = self.buffer("frame_var", wp.vec3)
+        self.frame_m2 = self.buffer("frame_m2", wp.vec3)   # sum of squared deviations (Welford)
 
     def params(self, frame: int) -> PTParams:
         s = self.settings
@@ -196,6 +206,8 @@ class PathTracer(Integrator):
         p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
         p.frame = wp.uint32(frame)
         p.spp = int(s["spp"])
+        p.sample_begin = 0
+        p.sample_end = p.spp
         p.max_depth = int(s["max_depth"])
         p.rr_depth = int(s["rr_depth"])
         p.use_rr = int(bool(s["rr"]))
@@ -206,7 +218,17 @@ class PathTracer(Integrator):
 
     def render_frame(self, frame: int):
         kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
-        self.run_stage("path_trace", kernel, [self.dscene.scene, self.camera(frame), self.params(frame)],
-                       [self.frame_mean, self.frame_var], nonfinite="nonfinite_outputs")
+        p = self.params(frame)
+        # One launch per frame; with a progress hook, a few launches over consecutive samples (the
+        # same numbers in the same order, so the same image) so that long frames show progress.
+        parts = min(p.spp, 8) if self.on_samples is not None else 1
+        bounds = [p.spp * i // parts for i in range(parts + 1)]
+        for i in range(parts):
+            p.sample_begin, p.sample_end = bounds[i], bounds[i + 1]
+            self.run_stage("path_trace", kernel, [self.dscene.scene, self.camera(frame), p],
+                           [self.frame_mean, self.frame_m2], nonfinite="nonfinite_outputs")
+            if self.on_samples is not None:
+                self.on_samples(p.sample_end, p.spp)
         shape = (self.height, self.width, 3)
-        return self.frame_mean.numpy().reshape(shape), self.frame_var.numpy().reshape(shape)
+        var = self.frame_m2.numpy() / np.float32(p.spp)
+        return self.frame_mean.numpy().reshape(shape), var.reshape(shape)

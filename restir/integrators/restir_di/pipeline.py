@@ -154,5 +154,7 @@ class ReSTIRDI(Integrator):
             gb.swap()
             self.prev_camera = camera
             moments.add(self.sample_L.numpy())
+            if self.on_samples is not None:
+                self.on_samples(s + 1, self.settings["spp"])
         shape = (self.height, self.width, 3)
         return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
