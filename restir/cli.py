@@ -107,6 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also write every frame's image as DIR/frame_0000.exr, frame_0001.exr, ...")
     r.add_argument("--quiet", action="store_true", help="no progress bar, timing table or notes")
 
+    sub.add_parser("info", help="list the methods with their settings (defaults, meanings) and the builtin scenes")
     v = sub.add_parser("validate", formatter_class=_Formatter, epilog=_builtins_epilog(),
                        help="test a method for bias against the path tracer (independent runs, z-tests)")
     v.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
@@ -331,6 +332,21 @@ def _validate(args) -> int:
     return {"pass": 0, "fail": 1, "inconclusive": 3}[result.verdict]
 
 
+def _info() -> int:
+    from . import __version__
+    from .integrators import METHODS
+
+    print(f"restir {__version__}\n\nmethods (--method NAME; settings with --set KEY=VALUE):")
+    for name, cls in METHODS.items():
+        print(f"  {name}: {cls.DESCRIPTION}")
+        for key, default in cls.SETTINGS.items():
+            value = str(default).lower() if isinstance(default, bool) else default
+            print(f"    {key + '=' + str(value):<28} {cls.SETTINGS_DOC[key]}")
+    print()
+    print(_builtins_epilog())
+    return 0
+
+
 def main(argv=None) -> int:
     try:
         args = build_parser().parse_args(argv)
@@ -341,6 +357,8 @@ def main(argv=None) -> int:
             return _render(args)
         if args.command == "validate":
             return _validate(args)
+        if args.command == "info":
+            return _info()
     except (SceneError, ConfigError) as e:
         msg = e.message if isinstance(e, SceneError) else str(e)
         loc = f"{e.loc}: " if isinstance(e, SceneError) and e.loc else ""

@@ -186,6 +186,12 @@ class PathTracer(Integrator):
     STAGES = ("path_trace",)
     KERNELS = (path_trace_kernel, path_trace_kernel_light_samples)
     SETTINGS = {"strategy": "mis", "rr": False, "nee.samples": 1}
+    SETTINGS_DOC = {
+        "strategy": "mis: NEE and BSDF sampling with the balance heuristic; nee: NEE only; bsdf: BSDF sampling only",
+        "rr": "Russian roulette from the scene's rr_depth (Mitsuba's rule)",
+        "nee.samples": "light samples per vertex (Mitsuba's direct integrator's emitter samples)",
+    }
+    DESCRIPTION = "reference path tracer (NEE + BSDF sampling with MIS), Mitsuba's max_depth"
 
     @staticmethod
     def check_settings(settings: dict) -> None:

@@ -373,3 +373,19 @@ def test_write_frames(tmp_path):
     imgs = [read_exr(str(frames / f"frame_{i:04d}.exr")) for i in range(3)]
     assert not np.array_equal(imgs[0], imgs[1])  # separate frames, not three copies of the mean
     np.testing.assert_allclose(np.mean(imgs, axis=0), read_exr(str(tmp_path / "a.exr")), rtol=1e-5, atol=1e-7)
+
+
+def test_info_lists_methods_settings_and_builtins(capsys):
+    from restir.cli import main
+    from restir.integrators import METHODS
+    from restir.scene.builtin import BUILTINS
+
+    assert main(["info"]) == 0
+    out = capsys.readouterr().out
+    for name, cls in METHODS.items():
+        assert set(cls.SETTINGS_DOC) == set(cls.SETTINGS), f"{name}: every setting needs a one-line meaning"
+        assert f"  {name}: " in out
+        for key in cls.SETTINGS:
+            assert f"    {key}=" in out and cls.SETTINGS_DOC[key] in out
+    for name in BUILTINS:
+        assert f"  {name} " in out

@@ -57,6 +57,18 @@ class ReSTIRDI(Integrator):
     # literature's 30 px at any size left reuse nearly idle on small images).
     SETTINGS = {"candidates": 32, "candidates.bsdf": 1, "visibility": "reuse", "temporal": True, "temporal.cap": 5.0,
                 "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": "auto", "debug.mutation": "none"}
+    SETTINGS_DOC = {
+        "candidates": "light-sampled candidates N_L of the initial RIS",
+        "candidates.bsdf": "BSDF-sampled candidates N_B (with reuse: needs visibility=reuse)",
+        "visibility": "reuse: visibility-aware targets (a visibility stage); shading: V traced at shading only",
+        "temporal": "temporal reuse of the previous frame's reservoirs",
+        "temporal.cap": "history confidence capped to this x the current one (<= 0: no cap, i.e. 1e6 x)",
+        "spatial.rounds": "spatial reuse rounds",
+        "spatial.neighbors": "neighbours per round (pairwise MIS)",
+        "spatial.radius": "neighbour disk radius in pixels; auto: 15 px at 1080 lines scaled with the height, >= 2",
+        "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
+    }
+    DESCRIPTION = "ReSTIR DI (direct light, max_depth 2): initial RIS, visibility, temporal and spatial reuse"
     SPATIAL_RADIUS_1080 = 15.0  # "auto" radius in pixels at 1080 lines (integrators/common/reuse_domains.py)
     VISIBILITY = ("reuse", "shading")
     MUTATIONS = tuple(MUTATIONS)
