@@ -266,25 +266,24 @@ def phase_res256(bench):
     print_matrix(g, caps, FRACS_256, [1, 2], res)
 
 
-def phase_cornell(bench):
-    res, seeds = 128, [1, 2]
-    fr = [2 / 128, 3 / 128, 5 / 128, 10 / 128, 30 / 128]
-    caps = [1, 2, 5, 10, 20]
-    table(bench, "cornell-box", res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
-    table(bench, "cornell-box", res, seeds, separate(res, 32, CAPS, fr, [1, 2]), 32, "separate")
-    g = table(bench, "cornell-box", res, seeds, grid(res, 32, caps, fr, [1, 2]), 32, "grid")
+def scene_sweep(bench, name, res, seeds, fr, caps, separate_caps):
+    """Today's defaults, then temporal-only / spatial-only rows, then the cap x radius x rounds grid."""
+    table(bench, name, res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
+    table(bench, name, res, seeds, separate(res, 32, separate_caps, fr, [1, 2]), 32, "separate")
+    g = table(bench, name, res, seeds, grid(res, 32, caps, fr, [1, 2]), 32, "grid")
     print_matrix(g, caps, fr, [1, 2], res)
+
+
+def phase_cornell(bench):
+    scene_sweep(bench, "cornell-box", 128, [1, 2], [2 / 128, 3 / 128, 5 / 128, 10 / 128, 30 / 128], [1, 2, 5, 10, 20],
+                CAPS)
 
 
 def phase_grey(bench):
     """Grey lights (saturation 0, same luminance): no colour-to-luminance noise floor."""
-    res, seeds = 128, [1]
-    fr = [1.5 / 128, 3 / 128, 30 / 1080, 5 / 128, 10 / 128, 30 / 128]
     caps = [2, 5, 20]
-    table(bench, "many-lights-grey", res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
-    table(bench, "many-lights-grey", res, seeds, separate(res, 32, caps, fr, [1, 2]), 32, "separate")
-    g = table(bench, "many-lights-grey", res, seeds, grid(res, 32, caps, fr, [1, 2]), 32, "grid")
-    print_matrix(g, caps, fr, [1, 2], res)
+    scene_sweep(bench, "many-lights-grey", 128, [1], [1.5 / 128, 3 / 128, 30 / 1080, 5 / 128, 10 / 128, 30 / 128],
+                caps, caps)
 
 
 def phase_small256(bench):
