@@ -13,13 +13,14 @@ class StageTimer:
         self.calls: dict[str, int] = defaultdict(int)
 
     @contextmanager
-    def stage(self, name: str):
+    def stage(self, name: str, new_call: bool = True):
+        """Time one run of a stage (new_call=False: one more part of the run just timed)."""
         wp.synchronize_device(self.device)
         t0 = time.perf_counter()
         yield
         wp.synchronize_device(self.device)
         self.ms[name] += (time.perf_counter() - t0) * 1e3
-        self.calls[name] += 1
+        self.calls[name] += int(new_call)
 
     def summary(self) -> dict:
         return {k: {"total_ms": v, "calls": self.calls[k], "ms_per_call": v / max(1, self.calls[k])} for k, v in self.ms.items()}

@@ -80,12 +80,14 @@ class Integrator:
         self.buffers.add(name, a)
         return a
 
-    def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights") -> None:
+    def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights",
+                  new_call: bool = True) -> None:
         """Launch one stage over the pixels, timed. Every stage kernel takes `events` (one vec4i per
         pixel, common/events.py) as its last output; they are summed into the counters here,
         non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
-        stages that write radiance)."""
-        with self.timer.stage(stage):
+        stages that write radiance). new_call=False: a further part of the same run of the stage
+        (its time adds to that run's)."""
+        with self.timer.stage(stage, new_call):
             launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
                           self.reverse_launch)
         ev = self.events.numpy().sum(axis=0, dtype=np.int64)

@@ -232,7 +232,7 @@ class PathTracer(Integrator):
         for i in range(parts):
             p.sample_begin, p.sample_end = bounds[i], bounds[i + 1]
             self.run_stage("path_trace", kernel, [self.dscene.scene, self.camera(frame), p],
-                           [self.frame_mean, self.frame_m2], nonfinite="nonfinite_outputs")
+                           [self.frame_mean, self.frame_m2], nonfinite="nonfinite_outputs", new_call=i == 0)
             if self.on_samples is not None:
                 self.on_samples(p.sample_end, p.spp)
         shape = (self.height, self.width, 3)
