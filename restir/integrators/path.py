@@ -32,7 +32,7 @@ from ..device.streams import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_
 from ..device.types import ENV_NONE, STRATEGY_BSDF, STRATEGY_MIS, STRATEGY_NEE
 from ..film import Welford, welford_add
 from .base import Integrator
-from .common.events import output_events
+from .common.events import output_events, ray_events
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
@@ -169,10 +169,10 @@ def make_path_trace_kernel(several_light_samples: bool):
             acc = welford_add(acc, res.L * ray.weight)
         frame_mean[pixel] = acc.mean
         frame_m2[pixel] = acc.m2
-        if params.sample_end == params.spp:
+        if params.sample_end == params.spp:  # a non-finite mean is counted once, when the frame is done
             events[pixel] = output_events(acc.mean, rays)
         else:
-            events[pixel] = output_events(wp.vec3(0.0), rays)
+            events[pixel] = ray_events(rays)
 
     return path_trace_kernel
 
@@ -225,13 +225,14 @@ class PathTracer(Integrator):
     def render_frame(self, frame: int):
         kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
         p = self.params(frame)
+        camera = self.camera(frame)
         # One launch per frame; with a progress hook, a few launches over consecutive samples (the
         # same numbers in the same order, so the same image) so that long frames show progress.
         parts = min(p.spp, 8) if self.on_samples is not None else 1
         bounds = [p.spp * i // parts for i in range(parts + 1)]
         for i in range(parts):
             p.sample_begin, p.sample_end = bounds[i], bounds[i + 1]
-            self.run_stage("path_trace", kernel, [self.dscene.scene, self.camera(frame), p],
+            self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p],
                            [self.frame_mean, self.frame_m2], nonfinite="nonfinite_outputs", new_call=i == 0)
             if self.on_samples is not None:
                 self.on_samples(p.sample_end, p.spp)

@@ -112,19 +112,13 @@ NO_CAP_RATIO = wp.constant(1.0e6)
 
 
 @wp.func
-def history_cap(cap_ratio: float, M_current: float) -> float:
-    """The cap of a temporal history's confidence: cap_ratio x the current input's (cap_ratio <= 0:
-    "no cap", NO_CAP_RATIO x). Every pass that reuses a history caps it through this."""
+def cap_history(M_history: float, cap_ratio: float, M_current: float) -> float:
+    """The one place a temporal history's confidence is capped: to cap_ratio x the current
+    input's (cap_ratio <= 0: "no cap", NO_CAP_RATIO x). The cap is the product even when the
+    current confidence is 0 (a pixel with no smooth lobe): the history then gets 0, not an
+    unbounded confidence (a cap "0 means no cap" once read it as the latter). The capped value
+    must be used consistently in every MIS weight that mentions this input."""
     ratio = cap_ratio
     if ratio <= 0.0:
         ratio = NO_CAP_RATIO
-    return ratio * M_current
-
-
-@wp.func
-def cap_confidence(M: float, cap: float) -> float:
-    """The one place confidences are capped (cap <= 0: no cap). The capped value must be used
-    consistently in every MIS weight that mentions this input."""
-    if cap > 0.0:
-        return wp.min(M, cap)
-    return M
+    return wp.min(M_history, ratio * M_current)

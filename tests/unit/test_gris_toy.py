@@ -20,7 +20,7 @@ from scipy import stats as sps
 from restir.device.rng import rng_key, rng_uniform
 from restir.parallel import launch_pixels
 from restir.resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization, talbot_weight2
-from restir.resampling.ris import cap_confidence, ris_contribution_weight, ris_finalize, ris_init, ris_merge, ris_stream
+from restir.resampling.ris import cap_history, ris_contribution_weight, ris_finalize, ris_init, ris_merge, ris_stream
 
 P = 9
 
@@ -116,8 +116,8 @@ def temporal_merge(cfg: ToyConfig, i: int, q: int, cur: ToyReservoir, prev: ToyR
     written as the ReSTIR stages write it (ris_merge with explicit J, talbot_weight2, ris_finalize)."""
     if cfg.mut_skip_zero_canonical != 0 and f_pixel(i, cur.y, cfg.failures) * cur.W == 0.0:
         return cur
-    Mp = cap_confidence(prev.M, cfg.cap)
     Mc = cur.M
+    Mp = cap_history(prev.M, cfg.cap, Mc)
     s = ris_init()
     # canonical sample y_c, against the history's density for it (through the back-shift)
     pc = f_pixel(i, cur.y, cfg.failures)

@@ -11,7 +11,8 @@ from restir.device.rng import rng_key, rng_uniform
 from restir.resampling.mis import (balance_weight, constant_binary_weight, constant_weight_biased,
                                    pairwise_add_neighbor, pairwise_init, pairwise_normalization, talbot_weight2,
                                    techniques_vec)
-from restir.resampling.ris import cap_confidence, ris_contribution_weight, ris_finalize, ris_init, ris_merge, ris_stream
+from restir.resampling.ris import (NO_CAP_RATIO, cap_history, ris_contribution_weight, ris_finalize, ris_init,
+                                   ris_merge, ris_stream)
 from restir.validation.stats import chi2_test
 
 MIS_PAIRWISE, MIS_BALANCE, MIS_CONSTANT_BINARY, MIS_CONSTANT_BIASED = 0, 1, 2, 3
@@ -223,17 +224,26 @@ def test_merge_weights_and_finalisation(device):
 
 
 def test_confidence_cap(device):
+    """cap_history, the one cap of a history's confidence: cap_ratio x the current confidence,
+    "no cap" (ratio <= 0) a cap at NO_CAP_RATIO x, and a current confidence of 0 caps at 0 (it
+    once read as "no cap" and let M grow without bound on pixels with no smooth lobe)."""
     @wp.kernel
-    def k_(x: wp.array(dtype=float), cap: float, out: wp.array(dtype=float)):
+    def k_(x: wp.array(dtype=float), ratio: float, current: float, out: wp.array(dtype=float)):
         i = wp.tid()
-        out[i] = cap_confidence(x[i], cap)
+        out[i] = cap_history(x[i], ratio, current)
+
+    def cap(x, ratio, current):
+        out = wp.zeros(len(x), dtype=float, device=device)
+        wp.launch(k_, dim=len(x), inputs=[wp.array(np.asarray(x, np.float32), device=device), ratio, current, out],
+                  device=device)
+        return out.numpy()
 
     x = np.array([0.0, 1.0, 5.0, 20.0, 100.0], np.float32)
-    out = wp.zeros(5, dtype=float, device=device)
-    wp.launch(k_, dim=5, inputs=[wp.array(x, device=device), 20.0, out], device=device)
-    np.testing.assert_array_equal(out.numpy(), [0, 1, 5, 20, 20])
-    wp.launch(k_, dim=5, inputs=[wp.array(x, device=device), 0.0, out], device=device)
-    np.testing.assert_array_equal(out.numpy(), x)
+    np.testing.assert_array_equal(cap(x, 20.0, 1.0), [0, 1, 5, 20, 20])
+    np.testing.assert_array_equal(cap(x, 0.0, 1.0), x)
+    np.testing.assert_array_equal(cap(x, 5.0, 2.0), [0, 1, 5, 10, 10])
+    np.testing.assert_array_equal(cap(x, 5.0, 0.0), 0.0)
+    np.testing.assert_array_equal(cap([1e30], 0.0, 3.0), [NO_CAP_RATIO * 3.0])
 
 
 # ----------------------------------------------------------------------------- U1: E[W | Y] = 1 / p_Y(Y)

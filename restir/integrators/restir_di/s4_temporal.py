@@ -4,7 +4,7 @@ this pixel's primary hit was seen (generalized balance / Talbot MIS over the two
 The current primary hit is projected into the previous camera; the previous pixel is the
 temporal technique if it is on screen, had a primary hit and is geometrically similar (a
 decision on G-buffers only). The previous confidence is capped to temporal_cap x the current
-one before any weight is computed (history_cap, restir/resampling/ris.py; "no cap" is a cap at
+one before any weight is computed (cap_history, restir/resampling/ris.py; "no cap" is a cap at
 1e6 x, so that spatial reuse, which sums confidences, cannot grow them without bound). Light samples move
 unchanged (J = 1). Static scenes: the previous domain is evaluated with the current geometry.
 With visibility-aware targets, each cross-domain target costs one shadow ray (two per pixel).
@@ -18,7 +18,7 @@ from ...device.rng import rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import DI_TEMPORAL_DIMS_PER_SAMPLE, STAGE_DI_TEMPORAL
 from ...resampling.mis import talbot_weight2
-from ...resampling.ris import cap_confidence, history_cap, ris_finalize, ris_init, ris_merge
+from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, reproject
@@ -61,7 +61,7 @@ def make_temporal_kernel(skip_zero_canonical: bool = False, overweight_history: 
             if p_c * c.W == 0.0:
                 return
         r = prev_reservoirs[q]
-        Mq = cap_confidence(r.M, history_cap(params.temporal_cap, c.M))
+        Mq = cap_history(r.M, params.temporal_cap, c.M)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DI_TEMPORAL_DIMS_PER_SAMPLE)
         s = ris_init()
