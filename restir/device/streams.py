@@ -17,6 +17,10 @@ STAGE_DI_INITIAL = wp.constant(11)
 STAGE_DI_SHADE = wp.constant(12)
 STAGE_DI_TEMPORAL = wp.constant(13)
 STAGE_DI_SPATIAL = wp.constant(20)  # + round index, round < MAX_SPATIAL_ROUNDS
+STAGE_PT_PATHS = wp.constant(30)     # ReSTIR PT's base paths (keyed further by sample and candidate)
+STAGE_PT_RIS = wp.constant(31)       # ReSTIR PT's streaming-RIS selections (never the paths' stream)
+STAGE_PT_TEMPORAL = wp.constant(32)
+STAGE_PT_SPATIAL = wp.constant(40)   # + round index, round < MAX_SPATIAL_ROUNDS
 STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (0 < j < 256)
 
 MAX_SPATIAL_ROUNDS = 8
@@ -30,6 +34,10 @@ STAGE_RANGES = (
     ("di_shade", STAGE_DI_SHADE, 1),
     ("di_temporal", STAGE_DI_TEMPORAL, 1),
     ("di_spatial", STAGE_DI_SPATIAL, MAX_SPATIAL_ROUNDS),
+    ("pt_paths", STAGE_PT_PATHS, 1),
+    ("pt_ris", STAGE_PT_RIS, 1),
+    ("pt_temporal", STAGE_PT_TEMPORAL, 1),
+    ("pt_spatial", STAGE_PT_SPATIAL, MAX_SPATIAL_ROUNDS),
     ("path_nee", STAGE_PATH_NEE + 1, MAX_NEE_SAMPLES - 1),
 )
 
@@ -74,6 +82,22 @@ DI_SPATIAL_DIM_SELECT = wp.constant(2)
 DI_SPATIAL_DIM_CANONICAL = wp.constant(255)
 DI_MAX_NEIGHBORS = 32
 
+# ----------------------------------------------------------------------------- ReSTIR PT
+# Base paths: one key per (pixel, sample, candidate) path (rng_key of STAGE_PT_PATHS combined with
+# sample * candidates + candidate), stored in the reservoir as the path's replay seed; bounce b
+# uses the path tracer's layout at b * DIMS_PER_BOUNCE. Replay re-reads the same (key, dim) pairs,
+# so it consumes exactly the numbers the base path did, whatever it skips (ALGORITHMS.md 6 item 10).
+# RIS selections: the same per-path key in STAGE_PT_RIS, dimension 2 * (vertex index) + {0: the
+# NEE event there, 1: the BSDF-sampled emission found from there}.
+PT_RIS_DIMS_PER_VERTEX = wp.constant(2)
+PT_RIS_DIM_NEE = wp.constant(0)
+PT_RIS_DIM_EMISSION = wp.constant(1)
+PT_MAX_CANDIDATES = 64
+# temporal: s * PT_TEMPORAL_DIMS_PER_SAMPLE + {0: the current input's selection, 1: the history's}
+PT_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
+# spatial: as ReSTIR DI's (one stream per round)
+PT_MAX_NEIGHBORS = DI_MAX_NEIGHBORS
+
 # (stage, numbers per sample, [(first, count) of each use within one sample at the largest settings])
 DIM_LAYOUTS = (
     ("camera", CAMERA_DIMS_PER_SAMPLE, [(0, 2)]),
@@ -87,5 +111,14 @@ DIM_LAYOUTS = (
     ("di_temporal", DI_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
     ("di_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
      [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(DI_MAX_NEIGHBORS)
+      for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
+    ("pt_paths", DIMS_PER_SAMPLE,
+     [(b * DIMS_PER_BOUNCE + o, n) for b in range(1, MAX_SEGMENTS + 1)
+      for o, n in ((DIM_LIGHT_SELECT, 1), (DIM_LIGHT_POINT, 2), (DIM_BSDF_LOBE, 1), (DIM_BSDF_DIR, 2))]),
+    ("pt_ris", DIMS_PER_SAMPLE,
+     [(v * PT_RIS_DIMS_PER_VERTEX + o, 1) for v in range(MAX_SEGMENTS) for o in (PT_RIS_DIM_NEE, PT_RIS_DIM_EMISSION)]),
+    ("pt_temporal", PT_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
+    ("pt_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
+     [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(PT_MAX_NEIGHBORS)
       for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
 )

@@ -1,5 +1,6 @@
 """Integrators (methods). Each is a pipeline of stages; `METHODS` maps CLI names to classes."""
 from .path import PathTracer
 from .restir_di.pipeline import ReSTIRDI
+from .restir_pt.pipeline import ReSTIRPT
 
-METHODS = {"pt": PathTracer, "restir-di": ReSTIRDI}
+METHODS = {"pt": PathTracer, "restir-di": ReSTIRDI, "restir-pt": ReSTIRPT}

@@ -25,6 +25,7 @@ class Integrator:
     """Base class. Subclasses list STAGES and implement `render_frame` as a table of contents."""
 
     name = "base"
+    stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
 
@@ -87,7 +88,7 @@ class Integrator:
         non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
         stages that write radiance). new_call=False: a further part of the same run of the stage
         (its time adds to that run's)."""
-        with self.timer.stage(stage, new_call):
+        with self.timer.stage(self.stage_prefix + stage, new_call):
             launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
                           self.reverse_launch)
         ev = self.events.numpy().sum(axis=0, dtype=np.int64)

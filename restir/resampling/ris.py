@@ -21,6 +21,7 @@ class RisState:
     selected: int      # caller's index of the selected input, -1 while none
     nonfinite: int     # inputs whose weight was NaN or inf (counted, then treated as 0)
     zero: int          # inputs whose weight was 0 (kept as inputs; counted for the stats)
+    count: int         # inputs streamed
 
 
 @wp.func
@@ -32,6 +33,7 @@ def ris_init() -> RisState:
     s.selected = -1
     s.nonfinite = 0
     s.zero = 0
+    s.count = 0
     return s
 
 
@@ -49,6 +51,7 @@ def ris_stream(s: RisState, w: float, p_hat: float, M: float, index: int, u: flo
     """
     r = s
     r.M = s.M + M
+    r.count = s.count + 1
     weight = w
     if not is_finite(weight):
         r.nonfinite = s.nonfinite + 1

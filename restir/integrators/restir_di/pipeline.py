@@ -74,6 +74,12 @@ class ReSTIRDI(Integrator):
     MUTATIONS = tuple(MUTATIONS)
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
+    def __init__(self, *args, primary=None, **kw):
+        """primary: (G-buffer ping-pong, filter weights, emission) of the method this one is a part
+        of (ReSTIR PT's direct light), which then owns and fills them; None: its own."""
+        self.primary = primary
+        super().__init__(*args, **kw)
+
     @staticmethod
     def check_settings(settings: dict) -> None:
         from ...config import ConfigError
@@ -106,10 +112,13 @@ class ReSTIRDI(Integrator):
                                                      self.height)
         if self.settings["spatial.radius"] == "auto":
             self.settings["spatial.radius"] = self.spatial_radius  # the stats report the pixels used
-        # this sample's primary hits and the previous sample's (the temporal technique's domain)
-        self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
-        self.primary_weight = self.buffer("primary_weight", float)
-        self.emission = self.buffer("emission", wp.vec3)
+        if self.primary is None:
+            # this sample's primary hits and the previous sample's (the temporal technique's domain)
+            self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
+            self.primary_weight = self.buffer("primary_weight", float)
+            self.emission = self.buffer("emission", wp.vec3)
+        else:  # a component of another method, which owns the primary-hit layer
+            self.gbuffers, self.primary_weight, self.emission = self.primary
         # this sample's reservoirs as the passes refine them, and the previous sample's final ones
         self.reservoirs = PingPong(self.buffer("reservoirs", DIReservoir), self.buffer("reservoirs_prev", DIReservoir))
         self.pass_out = self.buffer("reservoirs_pass", DIReservoir)  # each reuse pass's output (ping-pong)
@@ -140,31 +149,45 @@ class ReSTIRDI(Integrator):
         if not in_place:
             self.reservoirs.current, self.pass_out = self.pass_out, current
 
-    def render_frame(self, frame: int):
+    def trace_primary(self, frame: int, sample: int, camera) -> None:
+        """The primary-hit stage of one sample (skipped when another method owns that layer)."""
+        p = self.params(frame, sample)
+        self.run_stage("gbuffer", primary_hits_kernel, [self.dscene.scene, camera, p.seed, p.frame, sample,
+                                                        p.hide_emitters],
+                       [self.gbuffers.current, self.primary_weight, self.emission])
+
+    def resample_and_shade(self, frame: int, sample: int) -> None:
+        """Every stage after the primary hits, for one sample: direct light into `sample_L`."""
         sc = self.dscene.scene
-        camera = self.camera(frame)
         temporal, spatial = stage_kernels(self.settings["debug.mutation"])
         in_place = self.settings["debug.mutation"] == "spatial_in_place"
         gb, res = self.gbuffers, self.reservoirs
+        p = self.params(frame, sample)
+        self.run_stage("initial", initial_kernel, [sc, p, gb.current], [res.current])
+        if p.visibility:
+            self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
+        if self.settings["temporal"] and self.prev_camera is not None:
+            self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        for rd in range(self.settings["spatial.rounds"]):
+            p.spatial_round = rd
+            self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place)
+        self.run_stage("shade", shade_kernel, [sc, p, gb.current, self.primary_weight, self.emission,
+                                               res.current], [self.sample_L], nonfinite="nonfinite_outputs")
+
+    def end_sample(self, camera) -> None:
+        """This sample's final reservoirs become the next one's history (the owner of the primary-hit
+        layer swaps the G-buffers)."""
+        self.reservoirs.swap()
+        self.prev_camera = camera
+
+    def render_frame(self, frame: int):
+        camera = self.camera(frame)
         moments = PixelMoments((self.num_pixels, 3))
         for s in range(self.settings["spp"]):
-            p = self.params(frame, s)
-            self.run_stage("gbuffer", primary_hits_kernel, [sc, camera, p.seed, p.frame, s, p.hide_emitters],
-                           [gb.current, self.primary_weight, self.emission])
-            self.run_stage("initial", initial_kernel, [sc, p, gb.current], [res.current])
-            if p.visibility:
-                self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
-            if self.settings["temporal"] and self.prev_camera is not None:
-                self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
-            for rd in range(self.settings["spatial.rounds"]):
-                p.spatial_round = rd
-                self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place)
-            self.run_stage("shade", shade_kernel, [sc, p, gb.current, self.primary_weight, self.emission,
-                                                   res.current], [self.sample_L], nonfinite="nonfinite_outputs")
-            # this sample's final reservoirs and primary hits become the next one's history
-            res.swap()
-            gb.swap()
-            self.prev_camera = camera
+            self.trace_primary(frame, s, camera)
+            self.resample_and_shade(frame, s)
+            self.end_sample(camera)
+            self.gbuffers.swap()
             moments.add(self.sample_L.numpy())
             if self.on_samples is not None:
                 self.on_samples(s + 1, self.settings["spp"])

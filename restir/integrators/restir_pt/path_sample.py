@@ -1,0 +1,125 @@
+"""The stored ReSTIR PT path sample (a reservoir) and its flags.
+
+A path sample is the random numbers of one base path (its replay seed: every number the path
+drew is rng_uniform(seed, dim) at a fixed dimension) together with which of its events was
+chosen: path length (the last scattering vertex; vertex index 0 is the primary hit x1) and end
+type (a light-sampled connection, NEE, or emission found by BSDF sampling). Its integrand in
+its own domain is F = f / p in primary sample space, the NEE/BSDF MIS weight included; the
+target is p_hat = luminance(F) (ALGORITHMS.md 0).
+
+For the reconnection shift it also keeps the reconnection (rc) vertex z, which every shifted
+path shares, with what the path does after it, and the source-side terms of the Jacobian:
+
+| field     | bytes | meaning |
+|-----------|-------|---------|
+| F         | 12    | integrand of the selected path in the domain that stores it |
+| W, M      | 4 + 4 | unbiased contribution weight, confidence |
+| flags     | 4     | path length, rc length, lobes at rcPrev and at z, end type, rc kind |
+| seed      | 4     | the base path's random-number key (replay) |
+| rc_tri    | 4     | z's triangle (a surface or an emissive triangle); -1 for an environment rc |
+| rc_bary   | 8     | z's barycentrics (full floats: z is rebuilt exactly) |
+| rc_wi     | 12    | direction leaving z (BSDF sample, NEE light, or the environment direction) |
+| rc_L      | 12    | radiance cached at z (see below) |
+| rc_jac    | 8     | source terms of J: (G(rcPrev, z) * p(rcPrev -> z), p(z -> next)), the latter 1 where it does not apply |
+| light_pdf | 4     | light pdf of the path's end, in the measure the shift needs (below) |
+
+Total 76 bytes (ALGORITHMS.md 1.1: the official 88). `rc_L` by case (1.3): NEE at z: Le of the
+light (its MIS weight is recomputed after a shift, so it is not in rc_L); emission found from z:
+Le; a path continuing past z: the product of what follows z's own scatter (MIS weight
+included); z the emitter itself (an "escape" rc vertex): unused (Le is re-read from the
+triangle). `light_pdf`: the solid-angle light pdf at z when the end's MIS is taken at z (z does
+not move, so it is fixed); the area-measure pdf of the emitter when z is that emitter, converted
+with the destination's geometry after a shift (6 item 14); the environment's pdf of rc_wi for
+an environment rc (fixed direction).
+"""
+import warp as wp
+
+from ...resampling.ris import ReservoirWeights
+
+# flags: bits 0-7 path length, 8-15 rc length (NO_RC: none), 16-21 lobe at rcPrev, 22-27 lobe at z
+# (0 when the path ends with NEE at z: all lobes), bit 28 NEE end, bits 29-30 rc kind
+NO_RC = wp.constant(255)
+PATH_NONE = wp.constant(-1)      # flags of a reservoir that holds no path
+RC_SURFACE = wp.constant(0)      # z is a scattering vertex
+RC_EMITTER = wp.constant(1)      # z is the emitter the path ends on (escape vertex)
+RC_ENV = wp.constant(2)          # z is the environment, in direction rc_wi
+MAX_PATH_LENGTH = 254            # the 8-bit length fields
+
+
+@wp.struct
+class PathReservoir:
+    F: wp.vec3
+    W: float
+    M: float
+    flags: int
+    seed: wp.uint32
+    rc_tri: int
+    rc_bary: wp.vec2
+    rc_wi: wp.vec3
+    rc_L: wp.vec3
+    rc_jac: wp.vec2
+    light_pdf: float
+
+
+@wp.func
+def pack_flags(path_length: int, rc_length: int, lobe_prev: int, lobe_rc: int, nee: int, rc_kind: int) -> int:
+    return path_length | (rc_length << 8) | (lobe_prev << 16) | (lobe_rc << 22) | (nee << 28) | (rc_kind << 29)
+
+
+@wp.func
+def path_length(flags: int) -> int:
+    return flags & 255
+
+
+@wp.func
+def rc_length(flags: int) -> int:
+    return (flags >> 8) & 255
+
+
+@wp.func
+def lobe_at_rc_prev(flags: int) -> int:
+    return (flags >> 16) & 63
+
+
+@wp.func
+def lobe_at_rc(flags: int) -> int:
+    return (flags >> 22) & 63
+
+
+@wp.func
+def ends_with_nee(flags: int) -> int:
+    return (flags >> 28) & 1
+
+
+@wp.func
+def rc_kind(flags: int) -> int:
+    return (flags >> 29) & 3
+
+
+@wp.func
+def empty_path() -> PathReservoir:
+    r = PathReservoir()
+    r.flags = PATH_NONE
+    r.rc_tri = -1
+    r.W = 0.0
+    r.M = 0.0
+    return r
+
+
+@wp.func
+def holds_path(r: PathReservoir) -> bool:
+    return r.flags != PATH_NONE
+
+
+@wp.func
+def store(chosen: PathReservoir, f: ReservoirWeights) -> PathReservoir:
+    """The stored result of a resampling pass: the chosen input's path (already shifted into this
+    domain: F and rc_jac are this domain's) with the pass's W and M; with nothing selected, no
+    path but the confidence. The one field copy of every PT stage."""
+    r = chosen
+    r.W = f.W
+    r.M = f.M
+    if f.selected == 0:
+        r.flags = PATH_NONE
+        r.F = wp.vec3(0.0)
+    return r

@@ -1,0 +1,56 @@
+"""Stage 1, trace and initial RIS: `candidates` base paths per pixel from its primary hit, every
+event of every path streamed into one reservoir (base_path.py; ALGORITHMS.md 2.2):
+w = p_hat(F) / C per event, W = w_sum / p_hat(selected), M = C (one per traced path, never one
+per event). Pixels without a primary hit keep an empty reservoir of M = 0.
+Reads: scene, G-buffer. Writes: reservoirs, events (non-finite and zero weights, rays).
+"""
+import warp as wp
+
+from ...device.rng import hash_combine, rng_key
+from ...device.scene_device import SceneDevice
+from ...device.streams import STAGE_PT_PATHS, STAGE_PT_RIS
+from ...resampling.ris import ris_finalize, ris_init
+from ..common.events import stage_events
+from ..common.gbuffer import GBuffer
+from ..common.shading import load_shading
+from .base_path import BasePath, trace_base_path
+from .params import PTRParams
+from .path_sample import MAX_PATH_LENGTH, PathReservoir, empty_path, store
+
+EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
+
+
+def make_initial_kernel(m_per_event: bool = False):
+    """The initial kernel; m_per_event builds the mutation that counts M per streamed event (and
+    divides W by it), the defect TESTING.md 5.11 lists; the shipped kernel is built without it."""
+
+    @wp.kernel(module="unique" if m_per_event else None)
+    def initial_kernel(offset: int, scene: SceneDevice, params: PTRParams, gb: GBuffer,
+                       reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
+        pixel = wp.tid() + offset
+        acc = BasePath()
+        acc.s = ris_init()
+        acc.r = empty_path()
+        out = empty_path()
+        sh = load_shading(scene, gb, pixel)
+        if sh.valid != 0:
+            path_key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_PATHS), wp.uint32(pixel))
+            ris_key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_RIS), wp.uint32(pixel))
+            for c in range(params.candidates):
+                path_id = wp.uint32(params.sample * params.candidates + c)
+                acc = trace_base_path(scene, params, sh, hash_combine(path_key, path_id),
+                                      hash_combine(ris_key, path_id), c * EVENTS_PER_PATH, acc)
+            f = ris_finalize(acc.s, 1.0)
+            f.M = float(params.candidates)
+            if wp.static(m_per_event):
+                n = float(acc.s.count)  # the defect: M = events streamed, and W = w_sum / (p_hat M)
+                f = ris_finalize(acc.s, wp.max(1.0, n) / float(params.candidates))
+                f.M = wp.max(1.0, n)
+            out = store(acc.r, f)
+        reservoirs[pixel] = out
+        events[pixel] = stage_events(acc.s, 0, acc.rays)
+
+    return initial_kernel
+
+
+initial_kernel = make_initial_kernel()

@@ -1,0 +1,114 @@
+"""ReSTIR PT shifts, deterministic properties (TESTING.md D2, D3; ALGORITHMS.md 3), on the base
+paths of real scenes, calling the production shift (restir_pt/shift.py) from a test kernel:
+
+- identity (D2): a path shifted into its own domain is itself (F within 1e-3 relative) with J = 1;
+- round trip (D3): a path shifted to another pixel and back is the source path again (F within
+  1e-3 relative), J(src -> dst) J(dst -> src) = 1 within 1e-3, and a shift succeeds iff the
+  inverse of its result does.
+At most 0.2% outliers are allowed (grazing reconnections in float32), and every shift kind must
+actually succeed on a good share of the pixel pairs (a test of dead shifts is no test).
+"""
+import numpy as np
+import pytest
+import warp as wp
+
+import restir
+from restir.api import make_integrator
+from restir.integrators.common.gbuffer import GBuffer
+from restir.integrators.common.shading import load_shading
+from restir.integrators.restir_pt.params import PTRParams
+from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path, rc_length
+from restir.integrators.restir_pt.shift import shift_path
+from restir.device.scene_device import SceneDevice
+
+
+@wp.kernel
+def round_trip_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+                      partner: wp.array(dtype=int), out: wp.array2d(dtype=float)):
+    """Per pixel: [holds, rc length, F lum, identity valid, identity F lum, identity J, forward valid,
+    back valid, back F lum, J product, forward J]."""
+    pixel = wp.tid()
+    r = reservoirs[pixel]
+    for i in range(11):
+        out[pixel, i] = 0.0
+    sc = load_shading(scene, gb, pixel)
+    if not holds_path(r) or sc.valid == 0 or r.W <= 0.0:
+        return
+    out[pixel, 0] = 1.0
+    out[pixel, 1] = float(rc_length(r.flags))
+    out[pixel, 2] = wp.dot(r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+    idn = shift_path(scene, params, r, sc)
+    out[pixel, 3] = float(idn.valid)
+    out[pixel, 4] = wp.dot(idn.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+    out[pixel, 5] = idn.J
+    n = partner[pixel]
+    sn = load_shading(scene, gb, n)
+    fwd = shift_path(scene, params, r, sn)
+    out[pixel, 6] = float(fwd.valid)
+    if fwd.valid != 0:
+        back = shift_path(scene, params, fwd.r, sc)
+        out[pixel, 7] = float(back.valid)
+        out[pixel, 8] = wp.dot(back.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+        out[pixel, 9] = fwd.J * back.J
+        out[pixel, 10] = fwd.J
+
+
+def base_paths(scene, shift, direct="restir-di", max_depth=5):
+    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=1, seed=7,
+                              max_depth=max_depth,
+                              settings={"shift": shift, "direct": direct, "temporal": False, "spatial.rounds": 0})
+    integ = make_integrator(scene, cfg)
+    integ.render_frame(0)
+    # after the frame, the final reservoirs and G-buffer are the "previous" ones
+    return integ, integ.reservoirs.previous, integ.gbuffers.previous
+
+
+def round_trips(scene_spec, shift, direct="restir-di", offset=3, size=48, **kw):
+    scene = restir.load_scene(scene_spec, width=size, height=size)
+    integ, res, gb = base_paths(scene, shift, direct, **kw)
+    n = integ.num_pixels
+    w = integ.width
+    idx = np.arange(n)
+    x, y = idx % w, idx // w
+    partner = (y * w + np.where(x + offset < w, x + offset, x - offset)).astype(np.int32)
+    out = wp.zeros((n, 11), dtype=float, device=integ.device)
+    p = integ.params(0, 0)
+    wp.launch(round_trip_kernel, dim=n, inputs=[integ.dscene.scene, p, gb, res,
+                                                 wp.array(partner, dtype=int, device=integ.device), out],
+              device=integ.device)
+    return out.numpy()
+
+
+def rel(a, b):
+    return np.abs(a - b) / np.maximum(np.abs(b), 1e-30)
+
+
+SCENES = ["builtin:cornell-box", "builtin:cornell-box-glossy"]
+
+
+@pytest.mark.parametrize("direct", ["restir-di", "pt"])
+@pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
+@pytest.mark.parametrize("scene", SCENES)
+def test_identity_and_round_trip(scene, shift, direct):
+    o = round_trips(scene, shift, direct)
+    holds = o[:, 0] > 0
+    assert holds.sum() > 200, "too few pixels hold a path"
+    # D2: identity
+    ident = o[holds]
+    bad_valid = ident[:, 3] == 0
+    bad = bad_valid | (rel(ident[:, 4], ident[:, 2]) > 1e-3) | (np.abs(ident[:, 5] - 1) > 1e-3)
+    print(scene, shift, direct, "paths", holds.sum(), "identity failures", bad.sum(),
+          "rc lengths", np.unique(ident[:, 1], return_counts=True))
+    assert bad.sum() <= max(1, 0.002 * holds.sum())
+    # D3: round trips of successful forward shifts
+    fwd = ident[:, 6] > 0
+    assert fwd.mean() > 0.2, f"shift success rate {fwd.mean():.3f}: reuse nearly dead"
+    t = ident[fwd]
+    bad = (t[:, 7] == 0) | (rel(t[:, 8], t[:, 2]) > 1e-3) | (np.abs(t[:, 9] - 1) > 1e-3)
+    print("forward success", fwd.mean(), "round-trip failures", bad.sum(), "of", fwd.sum(),
+          "J range", t[:, 10].min(), t[:, 10].max())
+    assert bad.sum() <= max(1, 0.002 * fwd.sum())
+    if shift == "replay":
+        np.testing.assert_array_equal(t[:, 10], 1.0)
+    else:
+        assert np.std(np.log(t[:, 10])) > 1e-3, "reconnection Jacobians are all 1: not exercised"
