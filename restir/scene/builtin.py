@@ -8,6 +8,8 @@
 - `cornell-box-glossy`: the same box with a GGX rough-conductor tall block and Beckmann walls.
 - `furnace`: a closed sphere, diffuse albedo 0.5, emitting 0.5 everywhere inside; every
   pixel's value is 1 - 0.5^max_depth (1 for unbounded depth).
+- `indirect-room`: the Cornell room lit almost only indirectly (its light faces the ceiling
+  above a baffle), with glossy surfaces: ReSTIR PT's test and benchmark scene.
 - `sphere-cap`: TESTING.md A1: a closed diffuse sphere whose emissive cap covers a fraction
   `phi` of its area; every non-emitting point has the same radiance (see `sphere_cap_radiance`).
 
@@ -223,12 +225,41 @@ def many_lights(width=256, height=256, spp=16, max_depth=-1, count=400, seed=7, 
     return scene
 
 
+def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.0) -> dict:
+    """The Cornell room lit almost only indirectly (ReSTIR PT's test and benchmark scene): its
+    light, 1.5x larger and `radiance_scale` x brighter, hangs 6 cm below the ceiling facing up,
+    above a slightly larger baffle, so that neither the camera nor the floor, walls and blocks
+    see it; only the ceiling is lit directly. Glossy surfaces: a GGX rough-conductor floor
+    (alpha 0.3), a rough-plastic tall block (GGX coat, alpha 0.1, over a white base: two
+    smooth lobes), a Beckmann rough-conductor back wall (alpha 0.4)."""
+    scene = cornell_box(width=width, height=height, spp=spp, max_depth=max_depth)
+    y = 0.5488 - 0.06
+    light = np.array(_scaled_quad(_QUADS["light"], 1.5)) / 1000.0
+    light[:, 1] = y
+    up = light[::-1]  # reversed winding: the emitting side faces the ceiling
+    baffle = np.array(_scaled_quad(_QUADS["light"], 1.8)) / 1000.0
+    baffle[:, 1] = y - 0.005
+    scene["light"] = _quads_mesh([list(up * 1000.0)], _diffuse([0, 0, 0], twosided=False),
+                                 {"type": "area", "radiance": {"type": "rgb", "value": [v * radiance_scale
+                                                                                        for v in LIGHT]}})
+    scene["baffle"] = _quads_mesh([list(baffle * 1000.0)], _diffuse(WHITE))
+    scene["floor"]["bsdf"] = {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3,
+                              "specular_reflectance": {"type": "rgb", "value": WHITE}}
+    scene["tall"]["bsdf"] = {"type": "roughplastic", "distribution": "ggx", "alpha": 0.1,
+                             "diffuse_reflectance": {"type": "rgb", "value": WHITE}}
+    scene["back"]["bsdf"] = {"type": "twosided", "bsdf": {
+        "type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,
+        "specular_reflectance": {"type": "rgb", "value": WHITE}}}
+    return scene
+
+
 BUILTINS = {
     "cornell-box": cornell_box,
     "cornell-box-glossy": lambda **kw: cornell_box(glossy=True, **kw),
     "furnace": furnace,
     "sphere-cap": sphere_cap,
     "many-lights": many_lights,
+    "indirect-room": indirect_room,
 }
 
 
@@ -241,6 +272,8 @@ BUILTIN_DESCRIPTIONS = {
     "sphere-cap": f"closed diffuse sphere lit by an emissive cap (TESTING.md A1), analytic radiance; "
                   f"max_depth {ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH - 1}; -1: unbounded)",
     "many-lights": "the Cornell room lit by 400 small coloured emitters (ReSTIR DI's benchmark)",
+    "indirect-room": "the Cornell room lit almost only indirectly (light hidden, facing the ceiling), glossy "
+                     "floor, block and wall (ReSTIR PT's benchmark)",
 }
 
 
