@@ -230,8 +230,10 @@ def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.
     light, 1.5x larger and `radiance_scale` x brighter, hangs 6 cm below the ceiling facing up,
     above a slightly larger baffle, so that neither the camera nor the floor, walls and blocks
     see it; only the ceiling is lit directly. Glossy surfaces: a GGX rough-conductor floor
-    (alpha 0.3), a rough-plastic tall block (GGX coat, alpha 0.1, over a white base: two
-    smooth lobes), a Beckmann rough-conductor back wall (alpha 0.4)."""
+    (alpha 0.3), a rough-plastic tall block (a sharp GGX coat, alpha 0.02, linear roughness 0.14,
+    over a white base: two smooth lobes, one rough and one not, so ReSTIR PT's reconnection
+    criteria depend on the lobe a path samples there), a Beckmann rough-conductor back wall
+    (alpha 0.4)."""
     scene = cornell_box(width=width, height=height, spp=spp, max_depth=max_depth)
     y = 0.5488 - 0.06
     light = np.array(_scaled_quad(_QUADS["light"], 1.5)) / 1000.0
@@ -245,7 +247,7 @@ def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.
     scene["baffle"] = _quads_mesh([list(baffle * 1000.0)], _diffuse(WHITE))
     scene["floor"]["bsdf"] = {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3,
                               "specular_reflectance": {"type": "rgb", "value": WHITE}}
-    scene["tall"]["bsdf"] = {"type": "roughplastic", "distribution": "ggx", "alpha": 0.1,
+    scene["tall"]["bsdf"] = {"type": "roughplastic", "distribution": "ggx", "alpha": 0.02,
                              "diffuse_reflectance": {"type": "rgb", "value": WHITE}}
     scene["back"]["bsdf"] = {"type": "twosided", "bsdf": {
         "type": "roughconductor", "distribution": "beckmann", "alpha": 0.4,

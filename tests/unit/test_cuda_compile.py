@@ -12,6 +12,10 @@ KERNEL_MODULES = [
     "restir.integrators.restir_di.s4_temporal",
     "restir.integrators.restir_di.s5_spatial",
     "restir.integrators.restir_di.s6_shade",
+    "restir.integrators.restir_pt.s1_initial",
+    "restir.integrators.restir_pt.s2_temporal",
+    "restir.integrators.restir_pt.s3_spatial",
+    "restir.integrators.restir_pt.s4_shade",
 ]
 
 

@@ -18,39 +18,51 @@ from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
 from restir.integrators.restir_pt.params import PTRParams
 from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path, rc_length
-from restir.integrators.restir_pt.shift import shift_path
+from restir.integrators.restir_pt.shift import make_shift, shift_path
 from restir.device.scene_device import SceneDevice
 
 
-@wp.kernel
-def round_trip_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
-                      partner: wp.array(dtype=int), out: wp.array2d(dtype=float)):
-    """Per pixel: [holds, rc length, F lum, identity valid, identity F lum, identity J, forward valid,
-    back valid, back F lum, J product, forward J]."""
-    pixel = wp.tid()
-    r = reservoirs[pixel]
-    for i in range(11):
-        out[pixel, i] = 0.0
-    sc = load_shading(scene, gb, pixel)
-    if not holds_path(r) or sc.valid == 0 or r.W <= 0.0:
-        return
-    out[pixel, 0] = 1.0
-    out[pixel, 1] = float(rc_length(r.flags))
-    out[pixel, 2] = wp.dot(r.F, wp.vec3(0.2126, 0.7152, 0.0722))
-    idn = shift_path(scene, params, r, sc)
-    out[pixel, 3] = float(idn.valid)
-    out[pixel, 4] = wp.dot(idn.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
-    out[pixel, 5] = idn.J
-    n = partner[pixel]
-    sn = load_shading(scene, gb, n)
-    fwd = shift_path(scene, params, r, sn)
-    out[pixel, 6] = float(fwd.valid)
-    if fwd.valid != 0:
-        back = shift_path(scene, params, fwd.r, sc)
-        out[pixel, 7] = float(back.valid)
-        out[pixel, 8] = wp.dot(back.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
-        out[pixel, 9] = fwd.J * back.J
-        out[pixel, 10] = fwd.J
+_kernels = {}
+
+
+def round_trip_kernel(mutation: str = "none"):
+    """The test kernel over the shipped shift, or over a mutant's (TESTING.md 5.11)."""
+    if mutation not in _kernels:
+        _kernels[mutation] = make_round_trip_kernel(shift_path if mutation == "none" else make_shift(mutation))
+    return _kernels[mutation]
+
+
+def make_round_trip_kernel(shift_path):
+    @wp.kernel(module="unique")
+    def round_trip_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+                            partner: wp.array(dtype=int), out: wp.array2d(dtype=float)):
+        """Per pixel: [holds, rc length, F lum, identity valid, identity F lum, identity J, forward valid,
+        back valid, back F lum, J product, forward J]."""
+        pixel = wp.tid()
+        r = reservoirs[pixel]
+        for i in range(11):
+            out[pixel, i] = 0.0
+        sc = load_shading(scene, gb, pixel)
+        if not holds_path(r) or sc.valid == 0 or r.W <= 0.0:
+            return
+        out[pixel, 0] = 1.0
+        out[pixel, 1] = float(rc_length(r.flags))
+        out[pixel, 2] = wp.dot(r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+        idn = shift_path(scene, params, r, sc)
+        out[pixel, 3] = float(idn.valid)
+        out[pixel, 4] = wp.dot(idn.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+        out[pixel, 5] = idn.J
+        n = partner[pixel]
+        sn = load_shading(scene, gb, n)
+        fwd = shift_path(scene, params, r, sn)
+        out[pixel, 6] = float(fwd.valid)
+        if fwd.valid != 0:
+            back = shift_path(scene, params, fwd.r, sc)
+            out[pixel, 7] = float(back.valid)
+            out[pixel, 8] = wp.dot(back.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
+            out[pixel, 9] = fwd.J * back.J
+            out[pixel, 10] = fwd.J
+    return round_trip_kernel
 
 
 def base_paths(scene, shift, direct="restir-di", max_depth=5):
@@ -63,7 +75,7 @@ def base_paths(scene, shift, direct="restir-di", max_depth=5):
     return integ, integ.reservoirs.previous, integ.gbuffers.previous
 
 
-def round_trips(scene_spec, shift, direct="restir-di", offset=3, size=48, **kw):
+def round_trips(scene_spec, shift, direct="restir-di", offset=3, size=48, mutation="none", **kw):
     scene = restir.load_scene(scene_spec, width=size, height=size)
     integ, res, gb = base_paths(scene, shift, direct, **kw)
     n = integ.num_pixels
@@ -73,7 +85,7 @@ def round_trips(scene_spec, shift, direct="restir-di", offset=3, size=48, **kw):
     partner = (y * w + np.where(x + offset < w, x + offset, x - offset)).astype(np.int32)
     out = wp.zeros((n, 11), dtype=float, device=integ.device)
     p = integ.params(0, 0)
-    wp.launch(round_trip_kernel, dim=n, inputs=[integ.dscene.scene, p, gb, res,
+    wp.launch(round_trip_kernel(mutation), dim=n, inputs=[integ.dscene.scene, p, gb, res,
                                                  wp.array(partner, dtype=int, device=integ.device), out],
               device=integ.device)
     return out.numpy()
@@ -83,14 +95,18 @@ def rel(a, b):
     return np.abs(a - b) / np.maximum(np.abs(b), 1e-30)
 
 
-SCENES = ["builtin:cornell-box", "builtin:cornell-box-glossy"]
+SCENES = ["builtin:cornell-box", "builtin:cornell-box-glossy", "builtin:indirect-room"]
 
 
 @pytest.mark.parametrize("direct", ["restir-di", "pt"])
 @pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
 @pytest.mark.parametrize("scene", SCENES)
 def test_identity_and_round_trip(scene, shift, direct):
-    o = round_trips(scene, shift, direct)
+    check_identity_and_round_trip(scene, shift, direct)
+
+
+def check_identity_and_round_trip(scene, shift, direct, mutation="none"):
+    o = round_trips(scene, shift, direct, mutation=mutation)
     holds = o[:, 0] > 0
     assert holds.sum() > 200, "too few pixels hold a path"
     # D2: identity
@@ -112,3 +128,16 @@ def test_identity_and_round_trip(scene, shift, direct):
         np.testing.assert_array_equal(t[:, 10], 1.0)
     else:
         assert np.std(np.log(t[:, 10])) > 1e-3, "reconnection Jacobians are all 1: not exercised"
+
+
+# (mutation, shift): each mutant shift must fail the identity / round-trip properties above. (An
+# inverted J keeps J J^-1 = 1 and skipped destination criteria keep round trips valid: those two
+# are caught by the integral test, test_pt_shift_integrals.py.)
+ROUND_TRIP_MUTANTS = [("misaligned_replay", "replay"), ("misaligned_replay", "hybrid"),
+                      ("keep_source_jacobian", "reconnection"), ("bsdf_twice", "reconnection")]
+
+
+@pytest.mark.parametrize("mutation,shift", ROUND_TRIP_MUTANTS)
+def test_mutant_shifts_break_identity_or_round_trip(mutation, shift):
+    with pytest.raises(AssertionError):
+        check_identity_and_round_trip("builtin:indirect-room", shift, "pt", mutation)
