@@ -36,13 +36,17 @@ import warp as wp
 
 from ...resampling.ris import ReservoirWeights
 
-# flags: bits 0-7 path length, 8-15 rc length (NO_RC: none), 16-21 lobe at rcPrev, 22-27 lobe at z
-# (0 when the path ends with NEE at z: all lobes), bit 28 NEE end, bits 29-30 rc kind
+# flags: bits 0-7 path length, 8-15 rc length (NO_RC: none), 16-18 lobe at rcPrev, 19-21 lobe at z
+# (lobe codes: 0 none or all lobes, else 1 + the LOBE_* bit), bit 22 NEE end, bits 23-24 rc kind,
+# bits 25-26 origin (which input of the last reuse passes the sample came from; for the stats)
 NO_RC = wp.constant(255)
 PATH_NONE = wp.constant(-1)      # flags of a reservoir that holds no path
 RC_SURFACE = wp.constant(0)      # z is a scattering vertex
 RC_EMITTER = wp.constant(1)      # z is the emitter the path ends on (escape vertex)
 RC_ENV = wp.constant(2)          # z is the environment, in direction rc_wi
+ORIGIN_CANONICAL = wp.constant(0)  # this frame's own base path
+ORIGIN_TEMPORAL = wp.constant(1)   # selected from the previous frame by temporal reuse
+ORIGIN_SPATIAL = wp.constant(2)    # selected from a neighbour by spatial reuse
 MAX_PATH_LENGTH = 254            # the 8-bit length fields
 
 
@@ -62,8 +66,26 @@ class PathReservoir:
 
 
 @wp.func
+def lobe_code(lobe: int) -> int:
+    """A LOBE_* flag (one bit of six) as a 3-bit code: 0 for none, else 1 + the bit's index."""
+    code = int(0)
+    for b in range(6):
+        if lobe == (1 << b):
+            code = b + 1
+    return code
+
+
+@wp.func
+def lobe_from_code(code: int) -> int:
+    if code == 0:
+        return 0
+    return 1 << (code - 1)
+
+
+@wp.func
 def pack_flags(path_length: int, rc_length: int, lobe_prev: int, lobe_rc: int, nee: int, rc_kind: int) -> int:
-    return path_length | (rc_length << 8) | (lobe_prev << 16) | (lobe_rc << 22) | (nee << 28) | (rc_kind << 29)
+    return path_length | (rc_length << 8) | (lobe_code(lobe_prev) << 16) | (lobe_code(lobe_rc) << 19) | (
+        nee << 22) | (rc_kind << 23)
 
 
 @wp.func
@@ -78,22 +100,30 @@ def rc_length(flags: int) -> int:
 
 @wp.func
 def lobe_at_rc_prev(flags: int) -> int:
-    return (flags >> 16) & 63
+    return lobe_from_code((flags >> 16) & 7)
 
 
 @wp.func
 def lobe_at_rc(flags: int) -> int:
-    return (flags >> 22) & 63
+    return lobe_from_code((flags >> 19) & 7)
 
 
 @wp.func
 def ends_with_nee(flags: int) -> int:
-    return (flags >> 28) & 1
+    return (flags >> 22) & 1
 
 
 @wp.func
 def rc_kind(flags: int) -> int:
-    return (flags >> 29) & 3
+    return (flags >> 23) & 3
+
+
+@wp.func
+def with_origin(r: PathReservoir, origin: int) -> PathReservoir:
+    out = r
+    if out.flags != PATH_NONE:
+        out.flags = (out.flags & ~(3 << 25)) | (origin << 25)
+    return out
 
 
 @wp.func

@@ -131,6 +131,9 @@ class ReSTIRPT(Integrator):
                                    self.buffer("reservoirs_prev", PathReservoir))
         self.pass_out = self.buffer("reservoirs_pass", PathReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
+        self.shift_events = self.buffer("shift_events", wp.vec4i)  # per-pass scratch (stats), like `events`
+        self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
+        self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
         self.prev_camera = None
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
         self.di = None
@@ -170,9 +173,12 @@ class ReSTIRPT(Integrator):
         swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass wrote."""
         current = self.reservoirs.current
         out = current if in_place else self.pass_out
-        self.run_stage(stage, kernel, [*inputs, current], [out])
+        self.run_stage(stage, kernel, [*inputs, current], [out, self.shift_events])
         if not in_place:
             self.reservoirs.current, self.pass_out = self.pass_out, current
+        counts = self.shift_events.numpy().sum(axis=0, dtype=np.int64)
+        acc = self.shift_counts.setdefault(stage, np.zeros(4, np.int64))
+        acc += counts
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene
@@ -202,6 +208,7 @@ class ReSTIRPT(Integrator):
                 self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight], [self.sample_L],
                                nonfinite="nonfinite_outputs")
                 L = self.sample_L.numpy()
+                self.count_origins(res.current.numpy())
             else:
                 L = direct.numpy()
             # this sample's final reservoirs and primary hits become the next one's history
@@ -216,8 +223,31 @@ class ReSTIRPT(Integrator):
         shape = (self.height, self.width, 3)
         return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
 
+    def count_origins(self, reservoirs: np.ndarray) -> None:
+        flags = reservoirs["flags"]
+        held = (flags != -1) & (reservoirs["W"] > 0)
+        self.origins += np.bincount((flags[held] >> 25) & 3, minlength=3)[:3]
+
     def stats(self) -> dict:
+        """The base stats, ReSTIR DI's rays, and ReSTIR PT's reuse diagnostics (TESTING.md 5.12):
+        per pass, the shifts tried and their success rate for reconnections (paths with an rc
+        vertex) and pure replays; a pass whose shifts never succeed is listed as reuse dead. The
+        fractions of the final samples (those with W > 0) taken from each kind of input."""
         out = super().stats()
         if self.di is not None:
             out["rays"] += self.di.rays
+        shifts, dead = {}, []
+        for stage, c in self.shift_counts.items():
+            kinds = {}
+            for name, (tried, ok) in (("reconnection", c[0:2]), ("replay", c[2:4])):
+                kinds[name] = {"tried": int(tried), "succeeded": int(ok),
+                               "success_rate": float(ok / tried) if tried else None}
+            shifts[stage] = kinds
+            if c[0] + c[2] > 0 and c[1] + c[3] == 0:
+                dead.append(stage)
+        total = self.origins.sum()
+        out["shifts"] = shifts
+        out["reuse_dead"] = dead
+        out["final_samples"] = {k: float(v / total) if total else 0.0
+                                for k, v in zip(("canonical", "temporal", "spatial"), self.origins)}
         return out

@@ -24,8 +24,8 @@ from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, reproject
 from ..common.shading import load_shading, similar_surfaces
 from .params import PTRParams
-from .path_sample import PathReservoir, holds_path, store
-from .shift import ShiftResult, shift_path
+from .path_sample import ORIGIN_TEMPORAL, PathReservoir, holds_path, store, with_origin
+from .shift import ShiftResult, shift_counts, shift_path
 
 CURRENT = wp.constant(0)
 HISTORY = wp.constant(1)
@@ -39,11 +39,13 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
     def temporal_kernel(offset: int, scene: SceneDevice, params: PTRParams, prev_camera: Camera, gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                        events: wp.array(dtype=wp.vec4i)):
+                        shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset
         c = reservoirs[pixel]
         reservoirs_out[pixel] = c
         events[pixel] = wp.vec4i(0)
+        shifts[pixel] = wp.vec4i(0)
+        counts = wp.vec4i(0)
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             return
@@ -65,6 +67,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
             fwd = shift(scene, params, r, sc)
             rays += fwd.rays
             failed += 1 - fwd.valid
+            counts += shift_counts(r, fwd)
         p_c_at_y = float(0.0)
         d_q_at_y = float(0.0)
         if fwd.valid != 0:
@@ -76,8 +79,10 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         if holds_path(c) and c.W > 0.0:
             back = shift(scene, params, c, sq)
             rays += back.rays
+            counts += shift_counts(c, back)
             if back.valid != 0:
                 d_q_at_xc = luminance(back.r.F) * back.J * Mq
+        shifts[pixel] = counts
         if wp.static(drop_failed):
             if fwd.valid == 0:
                 return
@@ -88,7 +93,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         s = ris_merge(s, m_q, p_c_at_y, fwd.J, r.W, Mq, HISTORY, rng_uniform(key, base + wp.uint32(1)))
         chosen = c
         if s.selected == HISTORY:
-            chosen = fwd.r
+            chosen = with_origin(fwd.r, ORIGIN_TEMPORAL)
         reservoirs_out[pixel] = store(chosen, ris_finalize(s, 1.0))
         events[pixel] = stage_events(s, failed, rays)
 

@@ -21,8 +21,8 @@ from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
 from ..common.shading import load_shading, similar_surfaces
 from .params import PTRParams
-from .path_sample import PathReservoir, holds_path, store
-from .shift import ShiftResult, shift_path
+from .path_sample import ORIGIN_SPATIAL, PathReservoir, holds_path, store, with_origin
+from .shift import ShiftResult, shift_counts, shift_path
 
 CANONICAL = wp.constant(1000)  # the canonical input's index in the selection (neighbours are 0..k-1)
 
@@ -34,10 +34,12 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
     @wp.kernel(module=module)
     def spatial_kernel(offset: int, scene: SceneDevice, params: PTRParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                       events: wp.array(dtype=wp.vec4i)):
+                       shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset
         c = reservoirs_in[pixel]
         events[pixel] = wp.vec4i(0)
+        shifts[pixel] = wp.vec4i(0)
+        counts = wp.vec4i(0)
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             reservoirs_out[pixel] = c
@@ -67,6 +69,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
                 fwd = shift(scene, params, r, sc)
                 rays += fwd.rays
                 failed += 1 - fwd.valid
+                counts += shift_counts(r, fwd)
             if wp.static(drop_failed):
                 if fwd.valid == 0:
                     continue
@@ -80,13 +83,14 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
             if has_c:
                 back = shift(scene, params, c, sn)
                 rays += back.rays
+                counts += shift_counts(c, back)
                 if back.valid != 0:
                     d_n_at_xc = luminance(back.r.F) * back.J * r.M
             mis = pairwise_add_neighbor(mis, d_n_at_y, p_c_at_y * c.M, p_c * c.M, d_n_at_xc)
             s = ris_merge(s, mis.m_i, p_c_at_y, fwd.J, r.W, r.M, j,
                           rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
             if s.selected == j:
-                chosen = fwd.r
+                chosen = with_origin(fwd.r, ORIGIN_SPATIAL)
         # ---- the canonical input last, with its accumulated pairwise weight
         s = ris_merge(s, mis.m_c, p_c, 1.0, c.W, c.M, CANONICAL,
                       rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
@@ -94,6 +98,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
             chosen = c
         reservoirs_out[pixel] = store(chosen, ris_finalize(s, pairwise_normalization(mis)))
         events[pixel] = stage_events(s, failed, rays)
+        shifts[pixel] = counts
 
     return spatial_kernel
 

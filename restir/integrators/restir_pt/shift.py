@@ -72,6 +72,15 @@ class ShiftResult:
     rays: int
 
 
+@wp.func
+def shift_counts(r: PathReservoir, res: ShiftResult) -> wp.vec4i:
+    """One attempted shift for the stats: [attempted with an rc vertex (a reconnection), succeeded,
+    attempted without one (pure replay), succeeded]."""
+    if rc_length(r.flags) != NO_RC:
+        return wp.vec4i(1, res.valid, 0, 0)
+    return wp.vec4i(0, 0, 1, res.valid)
+
+
 MUTATIONS = ("bsdf_twice", "invert_jacobian", "drop_rc_pdf", "keep_source_jacobian", "misaligned_replay",
              "skip_destination_criteria")
 
