@@ -1,0 +1,119 @@
+"""ReSTIR PT: per-stage timings and frame cost against the path tracer, memory per pixel, and
+relMSE at equal time against the path tracer, each phase in one run.
+
+    .venv/bin/python benchmarks/bench_restir_pt.py --phase stages    # 512x512, shared Cornell box, veach-bidir
+    .venv/bin/python benchmarks/bench_restir_pt.py --phase quality   # 128x128, indirect room, veach-bidir, glossy box
+
+stages: ReSTIR PT with its defaults (hybrid shift, ReSTIR DI for direct light, temporal reuse, one
+spatial round of 3 neighbours) for `--frames` frames after one warm-up frame, and the path tracer
+at 1 spp for the same frames, alternating (A B A B) so that machine noise hits both; reported as
+per-stage ms per frame, the ratio of the two frame times, and bytes per pixel by buffer.
+
+quality: every method renders the same static scene for 16 warm-up frames and 16 measured ones
+with the same camera-sample stream. relMSE = mean over pixels and channels of
+(x - ref)^2 / (ref^2 + 0.01) against the path tracer at `--ref-spp` (another seed). Two
+conventions: per frame (mean relMSE of the single frames 16..31) and accumulated (relMSE of the
+average of frames 16..31; the path tracer's frames are independent, ReSTIR PT's are not). The
+path tracer gets ReSTIR PT's measured frame time: spp = round(ms_restir_pt / ms_per_spp).
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+import restir
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+
+def shared(name):
+    from tests.shared_scenes import scene_path
+
+    return str(scene_path(name))
+
+
+def relmse(x, ref):
+    return float(np.mean((x - ref) ** 2 / (ref ** 2 + 0.01)))
+
+
+def render(scene, method, frames, seed=1, spp=1, settings=None, **kw):
+    return restir.render(scene, restir.RenderConfig(method=method, spp=spp, frames=frames, seed=seed,
+                                                    settings=settings or {}, **kw))
+
+
+def phase_stages(args, out):
+    for name in ("cornell-box", "veach-bidir"):
+        scene = restir.load_scene(shared(name))
+        common = dict(max_depth=args.max_depth, width=512, height=512)
+        render(scene, "restir-pt", 1, **common)  # compile, warm up
+        render(scene, "pt", 1, **common)
+        pt_ms, pt_res = [], []
+        for rep in range(2):
+            a = render(scene, "restir-pt", args.frames, seed=rep, **common)
+            b = render(scene, "pt", args.frames, seed=rep, **common)
+            pt_res.append(a)
+            pt_ms.append((a.stats["ms_per_frame"], b.stats["ms_per_frame"]))
+        a = pt_res[-1]
+        stages = {k: v["total_ms"] / args.frames for k, v in a.stats["stages"].items()}
+        ratio = [x / y for x, y in pt_ms]
+        bpp = a.stats["bytes_per_pixel"]
+        print(f"\n{name} 512x512 max_depth {args.max_depth}: ReSTIR PT ms per frame by stage")
+        print("  " + "  ".join(f"{k} {v:.0f}" for k, v in stages.items()))
+        print(f"  frame: ReSTIR PT {pt_ms[-1][0]:.0f} ms, path tracer 1 spp {pt_ms[-1][1]:.0f} ms; ratio "
+              + ", ".join(f"{r:.2f}" for r in ratio) + " (two alternating repeats)")
+        print(f"  bytes per pixel: {bpp['total']:.0f} in all; " +
+              ", ".join(f"{k} {v:.0f}" for k, v in bpp.items() if k != "total"))
+        print(f"  shifts {json.dumps(a.stats['shifts'])}; final samples {a.stats['final_samples']}")
+        out[name] = {"stages_ms": stages, "frame_ms": pt_ms, "ratio": ratio, "bytes_per_pixel": bpp,
+                     "shifts": a.stats["shifts"], "final_samples": a.stats["final_samples"]}
+
+
+def phase_quality(args, out):
+    scenes = {"indirect-room": "builtin:indirect-room", "veach-bidir": shared("veach-bidir"),
+              "cornell-box-glossy": "builtin:cornell-box-glossy"}
+    warm, meas = 16, 16
+    for name, spec in scenes.items():
+        scene = restir.load_scene(spec)
+        common = dict(max_depth=args.max_depth, keep_frames=True, width=args.size, height=args.size)
+        ref = render(scene, "pt", 1, seed=99, spp=args.ref_spp, **common).image.astype(np.float64)
+        render(scene, "restir-pt", 1, **common)  # compile, warm up
+        ms_per_spp = render(scene, "pt", 4, spp=4, seed=7, **common).stats["ms_per_frame"] / 4
+        a = render(scene, "restir-pt", warm + meas, **common)
+        spp = max(1, int(round(a.stats["ms_per_frame"] / ms_per_spp)))
+        b = render(scene, "pt", warm + meas, spp=spp, **common)
+        fa, fb = (r.frame_images[warm:].astype(np.float64) for r in (a, b))
+        per_a, per_b = (np.mean([relmse(f, ref) for f in fs]) for fs in (fa, fb))
+        acc_a, acc_b = relmse(fa.mean(0), ref), relmse(fb.mean(0), ref)
+        print(f"\n{name} {args.size}x{args.size} max_depth {args.max_depth}: ReSTIR PT {a.stats['ms_per_frame']:.0f} ms "
+              f"per frame; path tracer at equal time {spp} spp ({b.stats['ms_per_frame']:.0f} ms measured)")
+        print(f"  relMSE per frame: ReSTIR PT {per_a:.4f}, path tracer {per_b:.4f}: {per_b / per_a:.2f}x lower")
+        print(f"  relMSE accumulated over {meas} frames: ReSTIR PT {acc_a:.4f}, path tracer {acc_b:.4f}: "
+              f"{acc_b / acc_a:.2f}x")
+        out[name] = {"restir_pt_ms": a.stats["ms_per_frame"], "pt_spp": spp, "pt_ms": b.stats["ms_per_frame"],
+                     "relmse_frame": [per_a, per_b], "relmse_accumulated": [acc_a, acc_b],
+                     "counters": a.stats["counters"], "shifts": a.stats["shifts"]}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--phase", choices=["stages", "quality", "all"], default="all")
+    ap.add_argument("--frames", type=int, default=4)
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--ref-spp", type=int, default=2048)
+    ap.add_argument("--json")
+    args = ap.parse_args()
+    out = {}
+    if args.phase in ("stages", "all"):
+        phase_stages(args, out)
+    if args.phase in ("quality", "all"):
+        phase_quality(args, out)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(out, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
