@@ -3,6 +3,7 @@ relMSE at equal time against the path tracer, each phase in one run.
 
     .venv/bin/python benchmarks/bench_restir_pt.py --phase stages    # 512x512, shared Cornell box, veach-bidir
     .venv/bin/python benchmarks/bench_restir_pt.py --phase quality   # 128x128, indirect room, veach-bidir, glossy box
+    .venv/bin/python benchmarks/bench_restir_pt.py --phase cap       # the temporal cap, indirect room, 128x128
 
 stages: ReSTIR PT with its defaults (hybrid shift, ReSTIR DI for direct light, temporal reuse, one
 spatial round of 3 neighbours) for `--frames` frames after one warm-up frame, and the path tracer
@@ -96,9 +97,27 @@ def phase_quality(args, out):
                      "counters": a.stats["counters"], "shifts": a.stats["shifts"]}
 
 
+def phase_cap(args, out):
+    """The temporal cap by measurement (jittered camera, as ReSTIR DI's defaults were chosen):
+    per-frame relMSE over frames 16..31 for each cap, two seeds, on the indirect room."""
+    scene = restir.load_scene("builtin:indirect-room")
+    common = dict(max_depth=args.max_depth, keep_frames=True, width=args.size, height=args.size)
+    ref = render(scene, "pt", 1, seed=99, spp=args.ref_spp, **common).image.astype(np.float64)
+    rows = {}
+    for cap in (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 0.0):
+        errs = []
+        for seed in (1, 2):
+            a = render(scene, "restir-pt", 32, seed=seed, settings={"temporal.cap": cap}, **common)
+            errs.append(np.mean([relmse(f, ref) for f in a.frame_images[16:].astype(np.float64)]))
+        rows[cap] = errs
+        print(f"  temporal.cap {cap:5.1f} ({'no cap' if cap == 0 else 'x current M'}): per-frame relMSE "
+              + ", ".join(f"{e:.4f}" for e in errs) + f"  mean {np.mean(errs):.4f}")
+    out["cap"] = {str(k): v for k, v in rows.items()}
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "quality", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "quality", "cap", "all"], default="all")
     ap.add_argument("--frames", type=int, default=4)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--size", type=int, default=128)
@@ -110,6 +129,8 @@ def main():
         phase_stages(args, out)
     if args.phase in ("quality", "all"):
         phase_quality(args, out)
+    if args.phase in ("cap", "all"):
+        phase_cap(args, out)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(out, f, indent=2)
