@@ -96,6 +96,17 @@ class Integrator:
             self.counters[name] = self.counters.get(name, 0) + int(ev[i])
         self.rays += int(ev[EV_RAYS])
 
+    def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False) -> None:
+        """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a
+        scratch buffer `self.pass_out`): reads this sample's reservoirs, writes `pass_out`, then
+        the two swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass
+        wrote. in_place: the race mutant, which writes the buffer it reads."""
+        current = self.reservoirs.current
+        out = current if in_place else self.pass_out
+        self.run_stage(stage, kernel, [*inputs, current], [out, *extra_outputs])
+        if not in_place:
+            self.reservoirs.current, self.pass_out = self.pass_out, current
+
     def stats(self) -> dict:
         """What the method reports about the frames rendered so far (the API adds wall times)."""
         stage_ms = sum(self.timer.ms.values())

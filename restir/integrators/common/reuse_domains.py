@@ -7,6 +7,9 @@ import warp as wp
 
 from ...device.camera import Camera, project_to_pixel
 from ...device.sampling import square_to_uniform_disk_concentric
+from ...device.scene_device import SceneDevice
+from .gbuffer import GBuffer
+from .shading import Shading, load_shading, similar_surfaces
 
 NO_PIXEL = wp.constant(-1)
 
@@ -38,6 +41,40 @@ def spatial_neighbor(u: wp.vec2, pixel: int, width: int, height: int, radius: fl
     if nx < 0 or ny < 0 or nx >= width or ny >= height or (nx == px and ny == py):
         return NO_PIXEL
     return ny * width + nx
+
+@wp.struct
+class Neighbor:
+    """A pixel whose reservoir a pixel may reuse, with its primary hit; pixel = NO_PIXEL: none."""
+    pixel: int
+    sh: Shading
+
+
+@wp.func
+def temporal_neighbor(scene: SceneDevice, prev_camera: Camera, prev_gb: GBuffer, sc: Shading) -> Neighbor:
+    """The temporal technique of a pixel with primary hit sc: the previous frame's pixel that saw
+    the same point, if it had a primary hit there and the two surfaces are similar."""
+    n = Neighbor()
+    n.pixel = reproject(prev_camera, sc.hit.p)
+    if n.pixel != NO_PIXEL:
+        n.sh = load_shading(scene, prev_gb, n.pixel)
+        if n.sh.valid == 0 or not similar_surfaces(sc, n.sh):
+            n.pixel = NO_PIXEL
+    return n
+
+
+@wp.func
+def spatial_technique(scene: SceneDevice, gb: GBuffer, u: wp.vec2, pixel: int, width: int, height: int,
+                      radius: float, sc: Shading) -> Neighbor:
+    """One spatial technique of a pixel with primary hit sc: a pixel drawn in the disk
+    (spatial_neighbor), kept if it has a primary hit similar to sc."""
+    n = Neighbor()
+    n.pixel = spatial_neighbor(u, pixel, width, height, radius)
+    if n.pixel != NO_PIXEL:
+        n.sh = load_shading(scene, gb, n.pixel)
+        if n.sh.valid == 0 or not similar_surfaces(sc, n.sh):
+            n.pixel = NO_PIXEL
+    return n
+
 
 def spatial_radius_for(radius_at_1080: float, height: int) -> float:
     """The spatial reuse radius in pixels for an image `height` lines high, from a radius given for

@@ -140,15 +140,6 @@ class ReSTIRDI(Integrator):
         p.spatial_radius = float(self.spatial_radius)
         return p
 
-    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
-        """A pass that refines this sample's reservoirs: reads them, writes `pass_out`, then the two
-        swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass wrote."""
-        current = self.reservoirs.current
-        out = current if in_place else self.pass_out
-        self.run_stage(stage, kernel, [*inputs, current], [out])
-        if not in_place:
-            self.reservoirs.current, self.pass_out = self.pass_out, current
-
     def trace_primary(self, frame: int, sample: int, camera) -> None:
         """The primary-hit stage of one sample (skipped when another method owns that layer)."""
         p = self.params(frame, sample)
@@ -170,7 +161,7 @@ class ReSTIRDI(Integrator):
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
         for rd in range(self.settings["spatial.rounds"]):
             p.spatial_round = rd
-            self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place)
+            self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place=in_place)
         self.run_stage("shade", shade_kernel, [sc, p, gb.current, self.primary_weight, self.emission,
                                                res.current], [self.sample_L], nonfinite="nonfinite_outputs")
 

@@ -21,8 +21,8 @@ from ...resampling.mis import talbot_weight2
 from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.reuse_domains import NO_PIXEL, reproject
-from ..common.shading import load_shading, similar_surfaces
+from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
+from ..common.shading import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, own_target, store, target
 
@@ -49,12 +49,11 @@ def make_temporal_kernel(skip_zero_canonical: bool = False, overweight_history: 
         if sc.valid == 0:
             return
         # ---- the temporal technique: where this hit was seen last frame (geometry only)
-        q = reproject(prev_camera, sc.hit.p)
-        if q == NO_PIXEL:
+        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        if nq.pixel == NO_PIXEL:
             return
-        sq = load_shading(scene, prev_gb, q)
-        if sq.valid == 0 or not similar_surfaces(sc, sq):
-            return
+        q = nq.pixel
+        sq = nq.sh
         vis = params.visibility
         p_c = own_target(scene, sc, c, vis)
         if wp.static(skip_zero_canonical):

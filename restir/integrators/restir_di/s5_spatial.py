@@ -20,8 +20,8 @@ from ...resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_nor
 from ...resampling.ris import ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
-from ..common.shading import load_shading, similar_surfaces
+from ..common.reuse_domains import NO_PIXEL, spatial_technique
+from ..common.shading import load_shading
 from .params import DIParams
 from .reservoir import DIReservoir, own_target, store, target
 
@@ -61,13 +61,12 @@ def make_spatial_kernel(skip_zero_canonical: bool = False, drop_empty_neighbors:
         for j in range(params.spatial_k):
             dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
             # ---- neighbour choice: geometry and screen position only
-            n = spatial_neighbor(rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width, height,
-                                 params.spatial_radius)
-            if n == NO_PIXEL:
+            nb = spatial_technique(scene, gb, rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width,
+                                   height, params.spatial_radius, sc)
+            if nb.pixel == NO_PIXEL:
                 continue
-            sn = load_shading(scene, gb, n)
-            if sn.valid == 0 or not similar_surfaces(sc, sn):
-                continue
+            n = nb.pixel
+            sn = nb.sh
             r = reservoirs_in[n]
             if wp.static(drop_empty_neighbors):
                 if r.W <= 0.0:

@@ -18,7 +18,7 @@ import warp as wp
 
 from ...device.bsdf import bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
-from ...device.intersect import T_MAX, trace_closest
+from ...device.intersect import T_MAX, SurfaceHit, trace_closest
 from ...device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
 from ...device.path_steps import connect_to_light, emission_mis_weight, scatter
 from ...device.rng import rng_uniform, rng_uniform2
@@ -47,6 +47,33 @@ class BasePath:
 def bounce_dim(k: int, slot: int) -> wp.uint32:
     """The dimension of a number drawn at vertex k (the path tracer's per-bounce layout)."""
     return wp.uint32((k + 1) * DIMS_PER_BOUNCE + slot)
+
+
+@wp.struct
+class Found:
+    """What a BSDF-sampled ray from x_k found: emission (or the environment), the light pdf of
+    that point from x_k (solid angle), the segment length (0 for the environment)."""
+    Le: wp.vec3
+    p_light: float
+    dist: float
+    is_env: int
+
+
+@wp.func
+def found_along(scene: SceneDevice, hit: SurfaceHit, nh: SurfaceHit, d: wp.vec3) -> Found:
+    """The emission the ray from hit along d found at nh (a miss: the environment)."""
+    f = Found()
+    f.is_env = wp.where(nh.valid == 0, 1, 0)
+    if f.is_env != 0:
+        if scene.env_kind != ENV_NONE:
+            f.Le = env_eval(scene, d)
+            f.p_light = env_pdf(scene, d)
+    else:
+        f.dist = segment(hit.p, hit.ng, nh.p)[3]
+        f.Le = triangle_emission(scene, nh.tri, nh.ns, -d)
+        if max3(f.Le) > 0.0:
+            f.p_light = triangle_light_pdf(scene, nh.tri, nh.ng, d, f.dist)
+    return f
 
 
 @wp.func
@@ -136,24 +163,16 @@ def trace_base_path(scene: SceneDevice, params: PTRParams, x0: Shading, seed: wp
         nh = trace_closest(scene, sc.o, sc.d, T_MAX)
         out.rays += 1
         # ---- emission found from x_k (or the environment): an event of length k
-        is_env = nh.valid == 0
-        Le = wp.vec3(0.0)
-        p_light = float(0.0)
-        dist = float(0.0)
-        if is_env:
-            if scene.env_kind != ENV_NONE:
-                Le = env_eval(scene, sc.d)
-                p_light = env_pdf(scene, sc.d)
-        else:
-            seg = segment(hit.p, hit.ng, nh.p)
-            dist = seg[3]
-            Le = triangle_emission(scene, nh.tri, nh.ns, -sc.d)
-            if max3(Le) > 0.0:
-                p_light = triangle_light_pdf(scene, nh.tri, nh.ng, sc.d, dist)
+        fd = found_along(scene, hit, nh, sc.d)
+        is_env = fd.is_env != 0
+        Le = fd.Le
+        p_light = fd.p_light
+        dist = fd.dist
         jac_next = float(0.0)
         if rc_len == NO_RC and not is_env and dist > 0.0:
             # the source terms of J as a shift will compute them, from the segment between the
             # two vertices (rc_criteria.segment)
+            seg = segment(hit.p, hit.ng, nh.p)
             w_pos = wp.vec3(seg[0], seg[1], seg[2])
             jac_next = wp.abs(wp.dot(nh.ng, w_pos)) / (dist * dist) * bsdf_pdf_lobes(mat, wi, to_local(frame, w_pos),
                                                                                        sc.bs.lobe)

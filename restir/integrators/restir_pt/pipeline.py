@@ -169,16 +169,10 @@ class ReSTIRPT(Integrator):
         return p
 
     def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
-        """A pass that refines this sample's reservoirs: reads them, writes `pass_out`, then the two
-        swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass wrote."""
-        current = self.reservoirs.current
-        out = current if in_place else self.pass_out
-        self.run_stage(stage, kernel, [*inputs, current], [out, self.shift_events])
-        if not in_place:
-            self.reservoirs.current, self.pass_out = self.pass_out, current
-        counts = self.shift_events.numpy().sum(axis=0, dtype=np.int64)
+        """The base class's ping-pong pass, with the pass's shift counts summed for the stats."""
+        super().reuse_pass(stage, kernel, inputs, (self.shift_events,), in_place)
         acc = self.shift_counts.setdefault(stage, np.zeros(4, np.int64))
-        acc += counts
+        acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene

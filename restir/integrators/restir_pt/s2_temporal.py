@@ -21,8 +21,8 @@ from ...resampling.mis import talbot_weight2
 from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.reuse_domains import NO_PIXEL, reproject
-from ..common.shading import load_shading, similar_surfaces
+from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
+from ..common.shading import load_shading
 from .params import PTRParams
 from .path_sample import ORIGIN_TEMPORAL, PathReservoir, holds_path, store, with_origin
 from .shift import ShiftResult, shift_counts, shift_path
@@ -49,12 +49,11 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             return
-        q = reproject(prev_camera, sc.hit.p)
-        if q == NO_PIXEL:
+        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        if nq.pixel == NO_PIXEL:
             return
-        sq = load_shading(scene, prev_gb, q)
-        if sq.valid == 0 or not similar_surfaces(sc, sq):
-            return
+        q = nq.pixel
+        sq = nq.sh
         r = prev_reservoirs[q]
         Mq = cap_history(r.M, params.temporal_cap, c.M)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))

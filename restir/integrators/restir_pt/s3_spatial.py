@@ -18,8 +18,8 @@ from ...resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_nor
 from ...resampling.ris import ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
-from ..common.shading import load_shading, similar_surfaces
+from ..common.reuse_domains import NO_PIXEL, spatial_technique
+from ..common.shading import load_shading
 from .params import PTRParams
 from .path_sample import ORIGIN_SPATIAL, PathReservoir, holds_path, store, with_origin
 from .shift import ShiftResult, shift_counts, shift_path
@@ -55,13 +55,12 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
         rays = int(0)
         for j in range(params.spatial_k):
             dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
-            n = spatial_neighbor(rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width, height,
-                                 params.spatial_radius)
-            if n == NO_PIXEL:
+            nb = spatial_technique(scene, gb, rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width,
+                                   height, params.spatial_radius, sc)
+            if nb.pixel == NO_PIXEL:
                 continue
-            sn = load_shading(scene, gb, n)
-            if sn.valid == 0 or not similar_surfaces(sc, sn):
-                continue
+            n = nb.pixel
+            sn = nb.sh
             r = reservoirs_in[n]
             # ---- the neighbour's sample here
             fwd = ShiftResult()

@@ -31,16 +31,16 @@ import warp as wp
 from ...device.bsdf import Material, bsdf_eval, bsdf_is_delta_only, bsdf_pdf, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, is_visible, offset_origin, surface_at, trace_closest, visible_to_light
-from ...device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
+from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.path_steps import connect_to_light, emission_mis_weight, scatter
 from ...device.rng import rng_uniform, rng_uniform2
 from ...device.sampling import Frame, frame_from_normal, to_local
 from ...device.scene_device import SceneDevice, material_at
 from ...device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT
-from ...device.types import ENV_NONE, STRATEGY_MIS
+from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
-from .base_path import bounce_dim
+from .base_path import bounce_dim, found_along
 from .params import SHIFT_HYBRID, PTRParams
 from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, PathReservoir, ends_with_nee, holds_path, lobe_at_rc,
                           lobe_at_rc_prev, path_length, rc_kind, rc_length)
@@ -166,24 +166,12 @@ def make_shift(mutation: str = "none"):
             beta = wp.cw_mul(y.beta, lobe_weight(y.mat, y.wi, sc.bs))
             nh = trace_closest(scene, sc.o, sc.d, T_MAX)
             res.rays = 1
-            is_env = nh.valid == 0
-            Le = wp.vec3(0.0)
-            p_light = float(0.0)
-            dist = float(0.0)
-            if is_env:
-                if scene.env_kind != ENV_NONE:
-                    Le = env_eval(scene, sc.d)
-                    p_light = env_pdf(scene, sc.d)
-            else:
-                dist = segment(y.hit.p, y.hit.ng, nh.p)[3]
-                Le = triangle_emission(scene, nh.tri, nh.ns, -sc.d)
-                if max3(Le) > 0.0:
-                    p_light = triangle_light_pdf(scene, nh.tri, nh.ng, sc.d, dist)
+            fd = found_along(scene, y.hit, nh, sc.d)
             if wp.static(check_destination):
                 rough = lobe_is_rough(y.mat, sc.bs.lobe, params.rough_threshold)
-                if qualifies_escape_vertex(params, j + 1, dist, rough, is_env):
+                if qualifies_escape_vertex(params, j + 1, fd.dist, rough, fd.is_env != 0):
                     return res
-            F = wp.cw_mul(beta, Le) * emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1, STRATEGY_MIS)
+            F = wp.cw_mul(beta, fd.Le) * emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, fd.p_light, 1, STRATEGY_MIS)
         p_hat = luminance(F)
         if p_hat > 0.0 and is_finite(p_hat):
             res.r = r
