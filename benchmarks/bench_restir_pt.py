@@ -15,7 +15,9 @@ with the same camera-sample stream. relMSE = mean over pixels and channels of
 (x - ref)^2 / (ref^2 + 0.01) against the path tracer at `--ref-spp` (another seed). Two
 conventions: per frame (mean relMSE of the single frames 16..31) and accumulated (relMSE of the
 average of frames 16..31; the path tracer's frames are independent, ReSTIR PT's are not). The
-path tracer gets ReSTIR PT's measured frame time: spp = round(ms_restir_pt / ms_per_spp).
+path tracer gets ReSTIR PT's measured frame time: its frame time is fitted as a + b spp from
+runs at 2 and 8 spp, and spp = round((ms_restir_pt - a) / b); both measured times are printed.
+`--settings` (JSON) renders ReSTIR PT with other settings than the defaults.
 """
 import argparse
 import json
@@ -76,13 +78,17 @@ def phase_quality(args, out):
               "cornell-box-glossy": "builtin:cornell-box-glossy"}
     warm, meas = 16, 16
     for name, spec in scenes.items():
+        if name not in args.scenes:
+            continue
         scene = restir.load_scene(spec)
         common = dict(max_depth=args.max_depth, keep_frames=True, width=args.size, height=args.size)
         ref = render(scene, "pt", 1, seed=99, spp=args.ref_spp, **common).image.astype(np.float64)
         render(scene, "restir-pt", 1, **common)  # compile, warm up
-        ms_per_spp = render(scene, "pt", 4, spp=4, seed=7, **common).stats["ms_per_frame"] / 4
-        a = render(scene, "restir-pt", warm + meas, **common)
-        spp = max(1, int(round(a.stats["ms_per_frame"] / ms_per_spp)))
+        # the path tracer's frame time is a + b spp (fixed costs per frame): fitted at 2 and 8 spp
+        t2, t8 = (render(scene, "pt", 4, spp=n, seed=7, **common).stats["ms_per_frame"] for n in (2, 8))
+        slope = (t8 - t2) / 6.0
+        a = render(scene, "restir-pt", warm + meas, settings=json.loads(args.settings), **common)
+        spp = max(1, int(round((a.stats["ms_per_frame"] - (t2 - 2 * slope)) / slope)))
         b = render(scene, "pt", warm + meas, spp=spp, **common)
         fa, fb = (r.frame_images[warm:].astype(np.float64) for r in (a, b))
         per_a, per_b = (np.mean([relmse(f, ref) for f in fs]) for fs in (fa, fb))
@@ -122,6 +128,8 @@ def main():
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--ref-spp", type=int, default=2048)
+    ap.add_argument("--settings", default="{}", help="ReSTIR PT settings (JSON) for the quality phase")
+    ap.add_argument("--scenes", nargs="+", default=["indirect-room", "veach-bidir", "cornell-box-glossy"])
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}

@@ -362,17 +362,22 @@ def test_every_frame_is_unbiased(tmp_path):
         assert rep.passed, f"frame {t}:\n{rep}"
 
 
-def long_run_trend(seeds, frames, batch, size=16, mutation="none"):
+def long_run_trend(seeds, frames, batch, size=16, mutation="none", scene=None, method="restir-di", max_depth=2,
+                   settings=None):
     """Per-batch image means (averaged over seeds) and per-batch maxima over a long run of
-    default ReSTIR DI on the feature scene (temporal and spatial reuse feeding each other)."""
+    default ReSTIR DI on the feature scene (temporal and spatial reuse feeding each other), or of
+    another method, scene and settings."""
     import tempfile
 
-    scene = scene_for("features", __import__("pathlib").Path(tempfile.mkdtemp()))
+    if scene is None:
+        scene = scene_for("features", __import__("pathlib").Path(tempfile.mkdtemp()))
+    if settings is None:
+        settings = {"candidates": 4, "spatial.neighbors": 8}
     means, peaks = [], []
     for s in range(seeds):
-        cfg = restir.RenderConfig(method="restir-di", spp=1, frames=frames, width=size, height=size, seed=7000 + s,
-                                  max_depth=2, keep_frames=True,
-                                  settings={"candidates": 4, "spatial.neighbors": 8, "debug.mutation": mutation})
+        cfg = restir.RenderConfig(method=method, spp=1, frames=frames, width=size, height=size, seed=7000 + s,
+                                  max_depth=max_depth, keep_frames=True,
+                                  settings={**settings, "debug.mutation": mutation})
         f = restir.render(scene, cfg).frame_images.astype(np.float64).mean(-1)  # (frames, H, W)
         b = f[: frames - frames % batch].reshape(-1, batch, size, size)
         means.append(b.mean(axis=(1, 2, 3)))
