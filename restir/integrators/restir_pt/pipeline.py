@@ -58,7 +58,8 @@ class ReSTIRPT(Integrator):
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "trace_initial",
               "temporal", "spatial", "shade")
     KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
-    # The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image.
+    # The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image; the
+    # temporal cap of 20 was also the best of 1-50 and none by measurement (BENCHMARKS.md).
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "temporal": True, "temporal.cap": 20.0,
                 "spatial.rounds": 1, "spatial.neighbors": 3, "spatial.radius": "auto", "rc.near_distance": 0.1,
                 "rc.roughness": 0.2, "debug.mutation": "none", **DI_SETTINGS}
