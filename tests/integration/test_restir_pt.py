@@ -78,8 +78,8 @@ def room_reference(max_depth):
 
 
 # The room's sharp rough-plastic coat and glossy floor make path contributions heavy-tailed:
-# at this cost the MDB is 5-6% (the sphere above carries the fast tier's power; the slow tier
-# runs the full matrix here with more runs).
+# at this cost the MDB is 5-6%, so these run in the slow tier (with the full matrix,
+# test_restir_pt_matrix.py); the sphere above carries the fast tier's power.
 ROOM = {
     "canonical": {"temporal": False, "spatial.rounds": 0},
     "spatial-reconnection-k8": {"temporal": False, "shift": "reconnection", "spatial.neighbors": 8},
@@ -87,6 +87,7 @@ ROOM = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("config", list(ROOM))
 def test_indirect_room_matches_path_tracing(config):
     ref = room_reference(5)

@@ -1,7 +1,7 @@
 """ReSTIR PT over frames and parameters (TESTING.md 5.7, 5.8), on the emissive-cap sphere (every
 non-emitting pixel has the same analytic value; exact reference).
 
-- I1-I3: image means over independent runs for neighbour counts k, temporal caps and spatial
+- I1-I3 (I2, I3 in the slow tier): image means over independent runs for neighbour counts k, temporal caps and spatial
   rounds; a weighted regression of the mean on the parameter must have |slope / SE| < 3.5 (the
   seed report's "more neighbours, brighter" shows as a slope), and every configuration passes
   the z-test against the exact value.
@@ -59,11 +59,13 @@ def test_invariance_in_k():
     check_flat([1, 2, 4, 8], lambda k: {"temporal": False, "spatial.neighbors": k})
 
 
+@pytest.mark.slow
 def test_invariance_in_cap():
     """I2 over temporal.cap in {1, 2, 5, 20, 100} (temporal reuse only)."""
     check_flat([1, 2, 5, 20, 100], lambda c: {"spatial.rounds": 0, "temporal.cap": float(c)})
 
 
+@pytest.mark.slow
 def test_invariance_in_rounds():
     """I3 over spatial.rounds in {1, 2, 3} (no temporal reuse)."""
     check_flat([1, 2, 3], lambda n: {"temporal": False, "spatial.rounds": n})

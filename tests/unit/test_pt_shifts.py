@@ -95,7 +95,8 @@ def rel(a, b):
     return np.abs(a - b) / np.maximum(np.abs(b), 1e-30)
 
 
-SCENES = ["builtin:cornell-box", "builtin:cornell-box-glossy", "builtin:indirect-room"]
+SCENES = ["builtin:cornell-box", pytest.param("builtin:cornell-box-glossy", marks=pytest.mark.slow),
+          "builtin:indirect-room"]
 
 
 @pytest.mark.parametrize("direct", ["restir-di", "pt"])
