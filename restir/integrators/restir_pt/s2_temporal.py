@@ -67,11 +67,13 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
             rays += fwd.rays
             failed += 1 - fwd.valid
             counts += shift_counts(r, fwd)
+        # The history's weight compares p_hat_q(x_q) / J M_q with p_hat_c(y) M_c; both are passed
+        # times J (the weight is a ratio), so that a tiny J cannot overflow it to inf/inf.
         p_c_at_y = float(0.0)
         d_q_at_y = float(0.0)
         if fwd.valid != 0:
             p_c_at_y = luminance(fwd.r.F)
-            d_q_at_y = luminance(r.F) / fwd.J * Mq
+            d_q_at_y = luminance(r.F) * Mq
         # ---- the current sample, shifted into the previous domain (its density there)
         p_c = luminance(c.F)
         d_q_at_xc = float(0.0)
@@ -88,7 +90,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         s = ris_init()
         m_c = talbot_weight2(p_c * c.M, d_q_at_xc, CURRENT)
         s = ris_merge(s, m_c, p_c, 1.0, c.W, c.M, CURRENT, rng_uniform(key, base))
-        m_q = talbot_weight2(p_c_at_y * c.M, d_q_at_y, HISTORY)
+        m_q = talbot_weight2(p_c_at_y * c.M * fwd.J, d_q_at_y, HISTORY)
         s = ris_merge(s, m_q, p_c_at_y, fwd.J, r.W, Mq, HISTORY, rng_uniform(key, base + wp.uint32(1)))
         chosen = c
         if s.selected == HISTORY:

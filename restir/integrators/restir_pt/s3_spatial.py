@@ -72,11 +72,13 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
             if wp.static(drop_failed):
                 if fwd.valid == 0:
                     continue
+            # The neighbour's weight compares p_hat_n(x_n) / J M_n with p_hat_c(y) M_c; both are
+            # passed times J (the weight is a ratio), so that a tiny J cannot overflow it to inf/inf.
             p_c_at_y = float(0.0)
             d_n_at_y = float(0.0)
             if fwd.valid != 0:
                 p_c_at_y = luminance(fwd.r.F)
-                d_n_at_y = luminance(r.F) / fwd.J * r.M
+                d_n_at_y = luminance(r.F) * r.M
             # ---- this pixel's sample there
             d_n_at_xc = float(0.0)
             if has_c:
@@ -85,7 +87,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
                 counts += shift_counts(c, back)
                 if back.valid != 0:
                     d_n_at_xc = luminance(back.r.F) * back.J * r.M
-            mis = pairwise_add_neighbor(mis, d_n_at_y, p_c_at_y * c.M, p_c * c.M, d_n_at_xc)
+            mis = pairwise_add_neighbor(mis, d_n_at_y, p_c_at_y * c.M * fwd.J, p_c * c.M, d_n_at_xc)
             s = ris_merge(s, mis.m_i, p_c_at_y, fwd.J, r.W, r.M, j,
                           rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
             if s.selected == j:
