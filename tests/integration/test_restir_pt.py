@@ -46,23 +46,27 @@ def check_sphere(settings, max_depth=4, k=32, frames=16, bound=0.015, allow_muta
 
 
 # (settings over the defaults: hybrid shift, direct light from ReSTIR DI, temporal + 1 spatial round)
+SLOW = pytest.mark.slow  # kept out of the fast tier for its time budget (covered again by the slow matrix)
 SPHERE = {
     "defaults": {},
     "direct-pt": {"direct": "pt"},
     "canonical-1": {"temporal": False, "spatial.rounds": 0},
-    "canonical-4": {"temporal": False, "spatial.rounds": 0, "candidates": 4},
+    "canonical-4": ({"temporal": False, "spatial.rounds": 0, "candidates": 4}, SLOW),
     "reconnection": {"shift": "reconnection", "direct": "pt"},
     "replay": {"shift": "replay", "direct": "pt"},
     "spatial-k8-rounds-3": {"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3},
-    "temporal-no-cap": {"temporal.cap": 0.0, "spatial.rounds": 0},
+    "temporal-no-cap": ({"temporal.cap": 0.0, "spatial.rounds": 0}, SLOW),
 }
 
 
-@pytest.mark.parametrize("config", list(SPHERE))
+@pytest.mark.parametrize("config", [pytest.param(k, marks=v[1]) if isinstance(v, tuple) else k
+                                    for k, v in SPHERE.items()])
 def test_emissive_cap_sphere_is_exact(config):
-    check_sphere(SPHERE[config])
+    c = SPHERE[config]
+    check_sphere(c[0] if isinstance(c, tuple) else c)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("max_depth", [3, 6])
 def test_emissive_cap_sphere_other_depths(max_depth):
     check_sphere({"spatial.neighbors": 4}, max_depth=max_depth)
@@ -99,8 +103,8 @@ def test_indirect_room_matches_path_tracing(config):
 
 # Power checks (TESTING.md 5.11) on the estimator: each mutant fails the test its unbiased build
 # passes. (The shift mutants are caught by tests/unit/test_pt_shifts.py and
-# test_pt_shift_integrals.py.)
-@pytest.mark.parametrize("mutation", ["m_per_event", "bsdf_twice"])
+# test_pt_shift_integrals.py, BSDF-twice among them; here it runs in the slow tier.)
+@pytest.mark.parametrize("mutation", ["m_per_event", pytest.param("bsdf_twice", marks=SLOW)])
 def test_estimator_mutations_are_caught_on_the_sphere(mutation):
     with pytest.raises(AssertionError):
         check_sphere({"debug.mutation": mutation, "direct": "pt"}, allow_mutation=True)
