@@ -16,7 +16,7 @@ import warp as wp
 
 import restir
 from restir.api import make_integrator
-from restir.device.intersect import T_MAX, offset_origin, trace_closest
+from restir.device.intersect import T_MAX, SurfaceHit, offset_origin, trace_closest
 from restir.device.sampling import cosine_hemisphere_to_square, square_to_cosine_hemisphere, to_local, to_world
 from restir.device.scene_device import SceneDevice
 from restir.device.types import LOBE_DIFFUSE_REFLECTION, MAT_DIFFUSE
@@ -31,11 +31,10 @@ H = 1.0e-3
 
 
 @wp.func
-def hit_tri(scene: SceneDevice, x: Shading, u: wp.vec2) -> wp.vec4:
-    """(z position, triangle) reached from x with the sample u."""
+def hit_from(scene: SceneDevice, x: Shading, u: wp.vec2) -> SurfaceHit:
+    """The vertex z reached from x with the sample u (a miss: valid = 0)."""
     d = wp.normalize(to_world(x.frame, square_to_cosine_hemisphere(u)))
-    h = trace_closest(scene, offset_origin(x.hit.p, x.hit.ng, d), d, T_MAX)
-    return wp.vec4(h.p[0], h.p[1], h.p[2], wp.where(h.valid != 0, float(h.tri), -1.0))
+    return trace_closest(scene, offset_origin(x.hit.p, x.hit.ng, d), d, T_MAX)
 
 
 @wp.func
@@ -53,15 +52,14 @@ def fd_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, partner: wp.ar
     y = load_shading(scene, gb, partner[i])
     if x.valid == 0 or y.valid == 0 or x.mat.kind != MAT_DIFFUSE or y.mat.kind != MAT_DIFFUSE:
         return
-    c = hit_tri(scene, x, u0[i])
-    if c[3] < 0.0:
+    z = hit_from(scene, x, u0[i])
+    if z.valid == 0:
         return
-    z = surface_at_hit(scene, x, u0[i])
     # the source path: rc vertex z at length 1, NEE at z (a fixed light direction and radiance)
     r = PathReservoir()
     r.flags = pack_flags(1, 1, LOBE_DIFFUSE_REFLECTION, 0, 1, RC_SURFACE)
-    r.rc_tri = int(c[3])
-    r.rc_bary = z
+    r.rc_tri = z.tri
+    r.rc_bary = z.bary
     r.rc_wi = wp.normalize(-to_world(x.frame, square_to_cosine_hemisphere(u0[i])) + wp.vec3(0.0, 0.3, 0.0))
     r.rc_L = wp.vec3(1.0)
     r.light_pdf = 1.0
@@ -80,21 +78,14 @@ def fd_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, partner: wp.ar
     for k in range(2):
         e = wp.vec2(0.0)
         e[k] = H
-        a = hit_tri(scene, x, u0[i] + e)
-        b = hit_tri(scene, x, u0[i] - e)
-        if a[3] != c[3] or b[3] != c[3]:
+        a = hit_from(scene, x, u0[i] + e)
+        b = hit_from(scene, x, u0[i] - e)
+        if a.valid == 0 or b.valid == 0 or a.tri != z.tri or b.tri != z.tri:
             return
-        dk = (u_at(y, wp.vec3(a[0], a[1], a[2])) - u_at(y, wp.vec3(b[0], b[1], b[2]))) / (2.0 * H)
+        dk = (u_at(y, a.p) - u_at(y, b.p)) / (2.0 * H)
         cols[0, k] = dk[0]
         cols[1, k] = dk[1]
     out[i] = wp.vec2(t.J, wp.abs(wp.determinant(cols)))
-
-
-@wp.func
-def surface_at_hit(scene: SceneDevice, x: Shading, u: wp.vec2) -> wp.vec2:
-    d = wp.normalize(to_world(x.frame, square_to_cosine_hemisphere(u)))
-    h = trace_closest(scene, offset_origin(x.hit.p, x.hit.ng, d), d, T_MAX)
-    return h.bary
 
 
 def test_reconnection_jacobian_matches_finite_differences():

@@ -31,7 +31,8 @@ from ...resampling.ris import RisState, ris_stream
 from ..common.shading import Shading
 from .params import PTRParams
 from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags)
-from .rc_criteria import segment, lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex
+from .rc_criteria import (lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex,
+                          segment)
 
 
 @wp.struct
@@ -52,9 +53,11 @@ def bounce_dim(k: int, slot: int) -> wp.uint32:
 @wp.struct
 class Found:
     """What a BSDF-sampled ray from x_k found: emission (or the environment), the light pdf of
-    that point from x_k (solid angle), the segment length (0 for the environment)."""
+    that point from x_k (solid angle), the segment x_k -> hit (rc_criteria.segment: unit direction
+    and length; length 0 for the environment)."""
     Le: wp.vec3
     p_light: float
+    dir: wp.vec3
     dist: float
     is_env: int
 
@@ -69,7 +72,9 @@ def found_along(scene: SceneDevice, hit: SurfaceHit, nh: SurfaceHit, d: wp.vec3)
             f.Le = env_eval(scene, d)
             f.p_light = env_pdf(scene, d)
     else:
-        f.dist = segment(hit.p, hit.ng, nh.p)[3]
+        seg = segment(hit.p, hit.ng, nh.p)
+        f.dir = wp.vec3(seg[0], seg[1], seg[2])
+        f.dist = seg[3]
         f.Le = triangle_emission(scene, nh.tri, nh.ns, -d)
         if max3(f.Le) > 0.0:
             f.p_light = triangle_light_pdf(scene, nh.tri, nh.ng, d, f.dist)
@@ -172,10 +177,8 @@ def trace_base_path(scene: SceneDevice, params: PTRParams, x0: Shading, seed: wp
         if rc_len == NO_RC and not is_env and dist > 0.0:
             # the source terms of J as a shift will compute them, from the segment between the
             # two vertices (rc_criteria.segment)
-            seg = segment(hit.p, hit.ng, nh.p)
-            w_pos = wp.vec3(seg[0], seg[1], seg[2])
-            jac_next = wp.abs(wp.dot(nh.ng, w_pos)) / (dist * dist) * bsdf_pdf_lobes(mat, wi, to_local(frame, w_pos),
-                                                                                       sc.bs.lobe)
+            jac_next = wp.abs(wp.dot(nh.ng, fd.dir)) / (dist * dist) * bsdf_pdf_lobes(mat, wi, to_local(frame, fd.dir),
+                                                                                        sc.bs.lobe)
         if k >= params.first_event and max3(Le) > 0.0:
             mis = emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1, STRATEGY_MIS)
             F = wp.cw_mul(beta, Le) * mis

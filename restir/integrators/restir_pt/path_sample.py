@@ -119,6 +119,11 @@ def rc_kind(flags: int) -> int:
 
 
 @wp.func
+def origin(flags: int) -> int:
+    return (flags >> 25) & 3
+
+
+@wp.func
 def with_origin(r: PathReservoir, origin: int) -> PathReservoir:
     out = r
     if out.flags != PATH_NONE:

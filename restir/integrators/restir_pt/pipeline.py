@@ -132,7 +132,8 @@ class ReSTIRPT(Integrator):
                                    self.buffer("reservoirs_prev", PathReservoir))
         self.pass_out = self.buffer("reservoirs_pass", PathReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
-        self.shift_events = self.buffer("shift_events", wp.vec4i)  # per-pass scratch (stats), like `events`
+        # per-pass scratch for the stats, like `events`: shift counts in reuse passes, origins in shading
+        self.shift_events = self.buffer("shift_events", wp.vec4i)
         self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
         self.prev_camera = None
@@ -200,10 +201,10 @@ class ReSTIRPT(Integrator):
                     p.spatial_round = rd
                     self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
                                     mutation == "spatial_in_place")
-                self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight], [self.sample_L],
-                               nonfinite="nonfinite_outputs")
+                self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight],
+                               [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
                 L = self.sample_L.numpy()
-                self.count_origins(res.current.numpy())
+                self.origins += self.shift_events.numpy().sum(axis=0, dtype=np.int64)[:3]
             else:
                 L = direct.numpy()
             # this sample's final reservoirs and primary hits become the next one's history
@@ -217,11 +218,6 @@ class ReSTIRPT(Integrator):
                 self.on_samples(s + 1, self.settings["spp"])
         shape = (self.height, self.width, 3)
         return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
-
-    def count_origins(self, reservoirs: np.ndarray) -> None:
-        flags = reservoirs["flags"]
-        held = (flags != -1) & (reservoirs["W"] > 0)
-        self.origins += np.bincount((flags[held] >> 25) & 3, minlength=3)[:3]
 
     def stats(self) -> dict:
         """The base stats, ReSTIR DI's rays, and ReSTIR PT's reuse diagnostics (TESTING.md 5.12):

@@ -3,22 +3,27 @@
 `direct` is what ReSTIR PT does not resample: ReSTIR DI's output (emission seen directly and
 direct light at the primary hit) with direct=restir-di, or the directly seen emission alone with
 direct=pt. F already holds the path's visibility (every event was traced, every shift checked).
-Reads: reservoirs, direct, filter weights. Writes: sample_L, events (NaN/inf outputs counted).
+Reads: reservoirs, direct, filter weights. Writes: sample_L, origins (a one-hot vector: the final
+sample came from the pixel's own base path, temporal or spatial reuse; for the stats), events
+(NaN/inf outputs counted).
 """
 import warp as wp
 
 from ..common.events import output_events
-from .path_sample import PathReservoir, holds_path
+from .path_sample import PathReservoir, holds_path, origin
 
 
 @wp.kernel
 def shade_kernel(offset: int, reservoirs: wp.array(dtype=PathReservoir), direct: wp.array(dtype=wp.vec3),
                  primary_weight: wp.array(dtype=float), sample_L: wp.array(dtype=wp.vec3),
-                 events: wp.array(dtype=wp.vec4i)):
+                 origins: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
     L = direct[pixel]
     r = reservoirs[pixel]
+    o = wp.vec4i(0)
     if holds_path(r) and r.W > 0.0:
         L += r.F * (r.W * primary_weight[pixel])
+        o[origin(r.flags)] = 1
+    origins[pixel] = o
     sample_L[pixel] = L
     events[pixel] = output_events(L, 0)

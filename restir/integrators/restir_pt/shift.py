@@ -58,7 +58,6 @@ class Replay:
     frame: Frame
     wi: wp.vec3
     beta: wp.vec3     # lobe weights of the vertices before this one
-    d_in: wp.vec3     # direction of the segment that reached this vertex
     dist_in: float    # its length (0 at the primary hit)
     prev_rough: int   # the lobe sampled at the vertex before was rough
     rays: int
@@ -129,7 +128,6 @@ def make_shift(mutation: str = "none"):
                 return y
             y.prev_rough = wp.where(lobe_is_rough(y.mat, sc.bs.lobe, params.rough_threshold), 1, 0)
             y.dist_in = segment(y.hit.p, y.hit.ng, nh.p)[3]
-            y.d_in = sc.d
             y.hit = nh
             y.mat = material_at(scene, nh.tri, nh.uv)
             y.frame = frame_from_normal(nh.ns)
