@@ -150,3 +150,60 @@ def microfacet_sample(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
     if d.kind == MICROFACET_BECKMANN:
         return sample_beckmann_visible(d, wi, u)
     return sample_ggx_visible(d, wi, u)
+
+
+@wp.func
+def ggx_visible_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
+    """The inverse of sample_ggx_visible: the u that samples the normal m given wi."""
+    vh = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
+    lensq = vh[0] * vh[0] + vh[1] * vh[1]
+    t1v = wp.vec3(1.0, 0.0, 0.0)
+    if lensq > 0.0:
+        t1v = wp.vec3(-vh[1], vh[0], 0.0) / wp.sqrt(lensq)
+    t2v = wp.cross(vh, t1v)
+    nh = wp.normalize(wp.vec3(m[0] / d.alpha_u, m[1] / d.alpha_v, m[2]))  # undo the unstretch
+    t1 = wp.dot(nh, t1v)
+    s = 0.5 * (1.0 + vh[2])
+    t2 = (wp.dot(nh, t2v) - (1.0 - s) * wp.sqrt(wp.max(0.0, 1.0 - t1 * t1))) / s
+    phi = wp.atan2(t2, t1)
+    if phi < 0.0:
+        phi = phi + 2.0 * PI
+    return wp.vec2(t1 * t1 + t2 * t2, phi / (2.0 * PI))
+
+
+@wp.func
+def beckmann_visible_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
+    """The inverse of sample_beckmann_visible: the u that samples the normal m given wi (the
+    visible-slope CDF evaluated where the sampler inverts it by Newton's method)."""
+    ws = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
+    sin_s = wp.sqrt(ws[0] * ws[0] + ws[1] * ws[1])
+    cos_phi = float(1.0)
+    sin_phi = float(0.0)
+    if sin_s > 1.0e-7:
+        cos_phi = ws[0] / sin_s
+        sin_phi = ws[1] / sin_s
+    a = -m[0] / m[2] / d.alpha_u  # stretched slopes, rotated back into the incident plane
+    b = -m[1] / m[2] / d.alpha_v
+    s0 = cos_phi * a + sin_phi * b
+    s1 = -sin_phi * a + cos_phi * b
+    cos_i = ws[2]
+    if cos_i > 0.9999:
+        phi = wp.atan2(s1, s0)
+        if phi < 0.0:
+            phi = phi + 2.0 * PI
+        return wp.vec2(1.0 - wp.exp(-(s0 * s0 + s1 * s1)), phi / (2.0 * PI))
+    sin_i = wp.sqrt(wp.max(0.0, 1.0 - cos_i * cos_i))
+    tan_i = sin_i / cos_i
+    cot_i = cos_i / sin_i
+    k = 1.0 / (1.0 + wp.erf(cot_i) + tan_i * wp.exp(-cot_i * cot_i) / wp.sqrt(PI))
+    u0 = k * (1.0 + wp.erf(s0) + tan_i * wp.exp(-s0 * s0) / wp.sqrt(PI))
+    return wp.vec2(u0, 0.5 * (wp.erf(s1) + 1.0))
+
+
+@wp.func
+def microfacet_sample_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
+    """The inverse of microfacet_sample (m a visible normal for wi): for primary-sample-space
+    tools and tests, such as the finite-difference Jacobians of ReSTIR PT's shifts."""
+    if d.kind == MICROFACET_BECKMANN:
+        return beckmann_visible_to_square(d, wi, m)
+    return ggx_visible_to_square(d, wi, m)

@@ -84,6 +84,9 @@ MUTATIONS = ("bsdf_twice", "invert_jacobian", "drop_rc_pdf", "keep_source_jacobi
              "skip_destination_criteria")
 
 
+_replay_prefixes: dict = {}  # each build's prefix replay, by mutation (tests replay prefixes as the shift does)
+
+
 def make_shift(mutation: str = "none"):
     """The shift function; `mutation` (one of MUTATIONS, or "none") builds a fault-injected variant."""
     assert mutation == "none" or mutation in MUTATIONS, mutation
@@ -301,7 +304,9 @@ def make_shift(mutation: str = "none"):
         res.rays += y.rays
         return res
 
+    _replay_prefixes[mutation] = replay_prefix
     return shift_path
 
 
 shift_path = make_shift()
+replay_prefix = _replay_prefixes["none"]
