@@ -113,28 +113,55 @@ def beckmann_visible_slopes(cos_i: float, u: wp.vec2) -> wp.vec2:
 
 
 @wp.func
-def sample_beckmann_visible(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
-    ws = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))  # stretch to alpha = 1
-    slope = beckmann_visible_slopes(ws[2], u)
+def beckmann_incident_plane(d: Microfacet, wi: wp.vec3) -> wp.vec3:
+    """wi stretched to alpha = 1: (its cos theta, and cos phi, sin phi of its incident plane)."""
+    ws = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
     sin_s = wp.sqrt(ws[0] * ws[0] + ws[1] * ws[1])
     cos_phi = float(1.0)
     sin_phi = float(0.0)
     if sin_s > 1.0e-7:
         cos_phi = ws[0] / sin_s
         sin_phi = ws[1] / sin_s
+    return wp.vec3(ws[2], cos_phi, sin_phi)
+
+
+@wp.func
+def sample_beckmann_visible(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
+    plane = beckmann_incident_plane(d, wi)
+    slope = beckmann_visible_slopes(plane[0], u)
+    cos_phi = plane[1]
+    sin_phi = plane[2]
     sx = (cos_phi * slope[0] - sin_phi * slope[1]) * d.alpha_u  # rotate, then unstretch
     sy = (sin_phi * slope[0] + cos_phi * slope[1]) * d.alpha_v
     return wp.normalize(wp.vec3(-sx, -sy, 1.0))
 
 
+@wp.struct
+class VisibleFrame:
+    """The frame of GGX visible-normal sampling: wi stretched to alpha = 1 (vh) and two tangents."""
+    vh: wp.vec3
+    t1: wp.vec3
+    t2: wp.vec3
+
+
+@wp.func
+def ggx_visible_frame(d: Microfacet, wi: wp.vec3) -> VisibleFrame:
+    f = VisibleFrame()
+    f.vh = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
+    lensq = f.vh[0] * f.vh[0] + f.vh[1] * f.vh[1]
+    f.t1 = wp.vec3(1.0, 0.0, 0.0)
+    if lensq > 0.0:
+        f.t1 = wp.vec3(-f.vh[1], f.vh[0], 0.0) / wp.sqrt(lensq)
+    f.t2 = wp.cross(f.vh, f.t1)
+    return f
+
+
 @wp.func
 def sample_ggx_visible(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
-    vh = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
-    lensq = vh[0] * vh[0] + vh[1] * vh[1]
-    t1v = wp.vec3(1.0, 0.0, 0.0)
-    if lensq > 0.0:
-        t1v = wp.vec3(-vh[1], vh[0], 0.0) / wp.sqrt(lensq)
-    t2v = wp.cross(vh, t1v)
+    fr = ggx_visible_frame(d, wi)
+    vh = fr.vh
+    t1v = fr.t1
+    t2v = fr.t2
     r = wp.sqrt(u[0])
     phi = 2.0 * PI * u[1]
     t1 = r * wp.cos(phi)
@@ -155,16 +182,11 @@ def microfacet_sample(d: Microfacet, wi: wp.vec3, u: wp.vec2) -> wp.vec3:
 @wp.func
 def ggx_visible_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
     """The inverse of sample_ggx_visible: the u that samples the normal m given wi."""
-    vh = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
-    lensq = vh[0] * vh[0] + vh[1] * vh[1]
-    t1v = wp.vec3(1.0, 0.0, 0.0)
-    if lensq > 0.0:
-        t1v = wp.vec3(-vh[1], vh[0], 0.0) / wp.sqrt(lensq)
-    t2v = wp.cross(vh, t1v)
+    fr = ggx_visible_frame(d, wi)
     nh = wp.normalize(wp.vec3(m[0] / d.alpha_u, m[1] / d.alpha_v, m[2]))  # undo the unstretch
-    t1 = wp.dot(nh, t1v)
-    s = 0.5 * (1.0 + vh[2])
-    t2 = (wp.dot(nh, t2v) - (1.0 - s) * wp.sqrt(wp.max(0.0, 1.0 - t1 * t1))) / s
+    t1 = wp.dot(nh, fr.t1)
+    s = 0.5 * (1.0 + fr.vh[2])
+    t2 = (wp.dot(nh, fr.t2) - (1.0 - s) * wp.sqrt(wp.max(0.0, 1.0 - t1 * t1))) / s
     phi = wp.atan2(t2, t1)
     if phi < 0.0:
         phi = phi + 2.0 * PI
@@ -175,18 +197,14 @@ def ggx_visible_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
 def beckmann_visible_to_square(d: Microfacet, wi: wp.vec3, m: wp.vec3) -> wp.vec2:
     """The inverse of sample_beckmann_visible: the u that samples the normal m given wi (the
     visible-slope CDF evaluated where the sampler inverts it by Newton's method)."""
-    ws = wp.normalize(wp.vec3(d.alpha_u * wi[0], d.alpha_v * wi[1], wi[2]))
-    sin_s = wp.sqrt(ws[0] * ws[0] + ws[1] * ws[1])
-    cos_phi = float(1.0)
-    sin_phi = float(0.0)
-    if sin_s > 1.0e-7:
-        cos_phi = ws[0] / sin_s
-        sin_phi = ws[1] / sin_s
+    plane = beckmann_incident_plane(d, wi)
+    cos_phi = plane[1]
+    sin_phi = plane[2]
     a = -m[0] / m[2] / d.alpha_u  # stretched slopes, rotated back into the incident plane
     b = -m[1] / m[2] / d.alpha_v
     s0 = cos_phi * a + sin_phi * b
     s1 = -sin_phi * a + cos_phi * b
-    cos_i = ws[2]
+    cos_i = plane[0]
     if cos_i > 0.9999:
         phi = wp.atan2(s1, s0)
         if phi < 0.0:

@@ -157,6 +157,19 @@ def u_toward(y: Replay, target: wp.vec3, kind: int, lobe: int) -> wp.vec2:
 
 
 @wp.func
+def central_difference(lobe: int, u0: wp.vec2, e: wp.vec2, u_dst: wp.vec2, ua: wp.vec2, ub: wp.vec2) -> wp.vec3:
+    """(u'(u0 + e) - u'(u0 - e)) / 2|e| as (du'/du_k, 1), from ua = u'(u0 + e), ub = u'(u0 - e) and
+    u_dst = u'(u0); 0 when the three points do not lie in one piece of the lobe's warp on both sides."""
+    p_src = piece(lobe, u0)
+    p_dst = piece(lobe, u_dst)
+    if piece(lobe, u0 + e) != p_src or piece(lobe, u0 - e) != p_src or piece(lobe, ua) != p_dst or \
+            piece(lobe, ub) != p_dst:
+        return wp.vec3(0.0)
+    d = wrapped(ua - ub) / (2.0 * wp.length(e))
+    return wp.vec3(d[0], d[1], 1.0)
+
+
+@wp.func
 def column_at_rc_prev(scene: SceneDevice, xr: Replay, yr: Replay, ul: float, u0: wp.vec2, k: int, h: float,
                       lobe: int, kind: int, tri: int) -> wp.vec3:
     """Central difference of u -> u' along u[k] with step h: (du'/du_k, 1), or 0 where a perturbed
@@ -167,15 +180,8 @@ def column_at_rc_prev(scene: SceneDevice, xr: Replay, yr: Replay, ul: float, u0:
     b = target_from(scene, xr, ul, u0 - e, lobe, kind, tri)
     if a.ok == 0 or b.ok == 0:
         return wp.vec3(0.0)
-    ua = u_toward(yr, a.p, kind, lobe)
-    ub = u_toward(yr, b.p, kind, lobe)
-    p_src = piece(lobe, u0)
-    p_dst = piece(lobe, u_toward(yr, target_from(scene, xr, ul, u0, lobe, kind, tri).p, kind, lobe))
-    if piece(lobe, u0 + e) != p_src or piece(lobe, u0 - e) != p_src or piece(lobe, ua) != p_dst or \
-            piece(lobe, ub) != p_dst:
-        return wp.vec3(0.0)
-    d = wrapped(ua - ub) / (2.0 * h)
-    return wp.vec3(d[0], d[1], 1.0)
+    u_dst = u_toward(yr, target_from(scene, xr, ul, u0, lobe, kind, tri).p, kind, lobe)
+    return central_difference(lobe, u0, e, u_dst, u_toward(yr, a.p, kind, lobe), u_toward(yr, b.p, kind, lobe))
 
 
 @wp.func
@@ -189,15 +195,9 @@ def column_at_z(mat: Material, wi_src: wp.vec3, wi_dst: wp.vec3, ul: float, u0: 
     sb = bsdf_sample(mat, wi_src, ul, u0 - e)
     if sa.valid == 0 or sb.valid == 0 or sa.lobe != lobe or sb.lobe != lobe:
         return wp.vec3(0.0)
-    ua = lobe_to_square(mat, wi_dst, sa.wo, lobe)
-    ub = lobe_to_square(mat, wi_dst, sb.wo, lobe)
-    p_src = piece(lobe, u0)
-    p_dst = piece(lobe, lobe_to_square(mat, wi_dst, bsdf_sample(mat, wi_src, ul, u0).wo, lobe))
-    if piece(lobe, u0 + e) != p_src or piece(lobe, u0 - e) != p_src or piece(lobe, ua) != p_dst or \
-            piece(lobe, ub) != p_dst:
-        return wp.vec3(0.0)
-    d = wrapped(ua - ub) / (2.0 * h)
-    return wp.vec3(d[0], d[1], 1.0)
+    u_dst = lobe_to_square(mat, wi_dst, bsdf_sample(mat, wi_src, ul, u0).wo, lobe)
+    return central_difference(lobe, u0, e, u_dst, lobe_to_square(mat, wi_dst, sa.wo, lobe),
+                              lobe_to_square(mat, wi_dst, sb.wo, lobe))
 
 
 @wp.func

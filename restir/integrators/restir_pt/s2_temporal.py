@@ -24,8 +24,9 @@ from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
 from .params import PTRParams
-from .path_sample import ORIGIN_TEMPORAL, PathReservoir, holds_path, store, with_origin
-from .shift import ShiftResult, shift_counts, shift_path
+from .path_sample import ORIGIN_TEMPORAL, PathReservoir, store, with_origin
+from .reuse_pair import ShiftTally, make_reuse_pair, tally
+from .shift import shift_path
 
 CURRENT = wp.constant(0)
 HISTORY = wp.constant(1)
@@ -34,6 +35,7 @@ HISTORY = wp.constant(1)
 def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
     """The temporal kernel over a shift function; drop_failed builds the mutation that drops a
     history whose shift failed (its M and its density in the current sample's weight)."""
+    shift_in, shift_out = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module)
     def temporal_kernel(offset: int, scene: SceneDevice, params: PTRParams, prev_camera: Camera, gb: GBuffer,
@@ -45,7 +47,6 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         reservoirs_out[pixel] = c
         events[pixel] = wp.vec4i(0)
         shifts[pixel] = wp.vec4i(0)
-        counts = wp.vec4i(0)
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             return
@@ -58,45 +59,25 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         Mq = cap_history(r.M, params.temporal_cap, c.M)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        rays = int(0)
-        failed = int(0)
-        # ---- the history's sample, shifted into this domain
-        fwd = ShiftResult()
-        if holds_path(r) and r.W > 0.0:
-            fwd = shift(scene, params, r, sc)
-            rays += fwd.rays
-            failed += 1 - fwd.valid
-            counts += shift_counts(r, fwd)
-        # The history's weight compares p_hat_q(x_q) / J M_q with p_hat_c(y) M_c; both are passed
-        # times J (the weight is a ratio), so that a tiny J cannot overflow it to inf/inf.
-        p_c_at_y = float(0.0)
-        d_q_at_y = float(0.0)
-        if fwd.valid != 0:
-            p_c_at_y = luminance(fwd.r.F)
-            d_q_at_y = luminance(r.F) * Mq
-        # ---- the current sample, shifted into the previous domain (its density there)
-        p_c = luminance(c.F)
-        d_q_at_xc = float(0.0)
-        if holds_path(c) and c.W > 0.0:
-            back = shift(scene, params, c, sq)
-            rays += back.rays
-            counts += shift_counts(c, back)
-            if back.valid != 0:
-                d_q_at_xc = luminance(back.r.F) * back.J * Mq
-        shifts[pixel] = counts
+        # ---- the history's sample shifted here, and the current sample there (its density there)
+        hist = shift_in(scene, params, r, Mq, c.M, sc)
+        cur = shift_out(scene, params, c, Mq, sq)
+        tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
+        shifts[pixel] = tl.counts
         if wp.static(drop_failed):
-            if fwd.valid == 0:
+            if hist.t.valid == 0:
                 return
         s = ris_init()
-        m_c = talbot_weight2(p_c * c.M, d_q_at_xc, CURRENT)
-        s = ris_merge(s, m_c, p_c, 1.0, c.W, c.M, CURRENT, rng_uniform(key, base))
-        m_q = talbot_weight2(p_c_at_y * c.M * fwd.J, d_q_at_y, HISTORY)
-        s = ris_merge(s, m_q, p_c_at_y, fwd.J, r.W, Mq, HISTORY, rng_uniform(key, base + wp.uint32(1)))
+        p_c = luminance(c.F)
+        s = ris_merge(s, talbot_weight2(p_c * c.M, cur.d_i, CURRENT), p_c, 1.0, c.W, c.M, CURRENT,
+                      rng_uniform(key, base))
+        s = ris_merge(s, talbot_weight2(hist.d_c, hist.d_i, HISTORY), hist.p_c, hist.t.J, r.W, Mq, HISTORY,
+                      rng_uniform(key, base + wp.uint32(1)))
         chosen = c
         if s.selected == HISTORY:
-            chosen = with_origin(fwd.r, ORIGIN_TEMPORAL)
+            chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
         reservoirs_out[pixel] = store(chosen, ris_finalize(s, 1.0))
-        events[pixel] = stage_events(s, failed, rays)
+        events[pixel] = stage_events(s, tl.failed, tl.rays)
 
     return temporal_kernel
 
