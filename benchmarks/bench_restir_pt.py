@@ -4,6 +4,7 @@ relMSE at equal time against the path tracer, each phase in one run.
     .venv/bin/python benchmarks/bench_restir_pt.py --phase stages    # 512x512, shared Cornell box, veach-bidir
     .venv/bin/python benchmarks/bench_restir_pt.py --phase quality   # 128x128, indirect room, veach-bidir, glossy box
     .venv/bin/python benchmarks/bench_restir_pt.py --phase cap       # the temporal cap, indirect room, 128x128
+    .venv/bin/python benchmarks/bench_restir_pt.py --phase di        # ReSTIR DI's settings inside ReSTIR PT
 
 stages: ReSTIR PT with its defaults (hybrid shift, ReSTIR DI for direct light, temporal reuse, one
 spatial round of 3 neighbours) for `--frames` frames after one warm-up frame, and the path tracer
@@ -18,6 +19,9 @@ average of frames 16..31; the path tracer's frames are independent, ReSTIR PT's 
 path tracer gets ReSTIR PT's measured frame time: its frame time is fitted as a + b spp from
 runs at 2 and 8 spp, and spp = round((ms_restir_pt - a) / b); both measured times are printed.
 `--settings` (JSON) renders ReSTIR PT with other settings than the defaults.
+
+di: the quality phase for a grid of ReSTIR DI settings (light candidates x spatial rounds) of the
+ReSTIR DI component that gives ReSTIR PT its direct light (how its defaults were chosen).
 """
 import argparse
 import json
@@ -73,34 +77,68 @@ def phase_stages(args, out):
                      "shifts": a.stats["shifts"], "final_samples": a.stats["final_samples"]}
 
 
+QUALITY_SCENES = {"indirect-room": lambda: "builtin:indirect-room", "veach-bidir": lambda: shared("veach-bidir"),
+                  "cornell-box-glossy": lambda: "builtin:cornell-box-glossy"}
+WARM, MEAS = 16, 16
+
+
+class EqualTime:
+    """One scene at args.size: the reference (path tracer at args.ref_spp, another seed) and the
+    path tracer's frame time as a + b spp (fitted at 2 and 8 spp), for equal-time comparisons."""
+
+    def __init__(self, args, spec):
+        self.scene = restir.load_scene(spec)
+        self.common = dict(max_depth=args.max_depth, keep_frames=True, width=args.size, height=args.size)
+        self.ref = render(self.scene, "pt", 1, seed=99, spp=args.ref_spp, **self.common).image.astype(np.float64)
+        render(self.scene, "restir-pt", 1, **self.common)  # compile, warm up
+        t2, t8 = (render(self.scene, "pt", 4, spp=n, seed=7, **self.common).stats["ms_per_frame"] for n in (2, 8))
+        self.slope = (t8 - t2) / 6.0
+        self.fixed = t2 - 2 * self.slope
+
+    def compare(self, settings):
+        """ReSTIR PT with `settings` against the path tracer at its measured frame time: relMSE
+        per frame (mean over frames 16..31) and accumulated (of their average), for both."""
+        a = render(self.scene, "restir-pt", WARM + MEAS, settings=settings, **self.common)
+        spp = max(1, int(round((a.stats["ms_per_frame"] - self.fixed) / self.slope)))
+        b = render(self.scene, "pt", WARM + MEAS, spp=spp, **self.common)
+        fa, fb = (r.frame_images[WARM:].astype(np.float64) for r in (a, b))
+        per = [np.mean([relmse(f, self.ref) for f in fs]) for fs in (fa, fb)]
+        acc = [relmse(fa.mean(0), self.ref), relmse(fb.mean(0), self.ref)]
+        return {"restir_pt_ms": a.stats["ms_per_frame"], "pt_spp": spp, "pt_ms": b.stats["ms_per_frame"],
+                "relmse_frame": per, "relmse_accumulated": acc, "counters": a.stats["counters"],
+                "shifts": a.stats["shifts"]}
+
+
+def report(name, args, r, label=""):
+    per, acc = r["relmse_frame"], r["relmse_accumulated"]
+    print(f"\n{name} {args.size}x{args.size} max_depth {args.max_depth}{label}: ReSTIR PT {r['restir_pt_ms']:.0f} ms "
+          f"per frame; path tracer at equal time {r['pt_spp']} spp ({r['pt_ms']:.0f} ms measured)")
+    print(f"  relMSE per frame: ReSTIR PT {per[0]:.4f}, path tracer {per[1]:.4f}: {per[1] / per[0]:.2f}x lower")
+    print(f"  relMSE accumulated over {MEAS} frames: ReSTIR PT {acc[0]:.4f}, path tracer {acc[1]:.4f}: "
+          f"{acc[1] / acc[0]:.2f}x")
+
+
 def phase_quality(args, out):
-    scenes = {"indirect-room": "builtin:indirect-room", "veach-bidir": shared("veach-bidir"),
-              "cornell-box-glossy": "builtin:cornell-box-glossy"}
-    warm, meas = 16, 16
-    for name, spec in scenes.items():
+    for name, spec in QUALITY_SCENES.items():
+        if name in args.scenes:
+            out[name] = EqualTime(args, spec()).compare(json.loads(args.settings))
+            report(name, args, out[name])
+
+
+# ReSTIR DI's settings inside ReSTIR PT (light candidates, spatial rounds): its own defaults (32, 2)
+# and lighter ones, each at equal time against the path tracer on every quality scene.
+DI_GRID = [(32, 2), (16, 1), (8, 1), (4, 1), (8, 0)]
+
+
+def phase_di(args, out):
+    for name, spec in QUALITY_SCENES.items():
         if name not in args.scenes:
             continue
-        scene = restir.load_scene(spec)
-        common = dict(max_depth=args.max_depth, keep_frames=True, width=args.size, height=args.size)
-        ref = render(scene, "pt", 1, seed=99, spp=args.ref_spp, **common).image.astype(np.float64)
-        render(scene, "restir-pt", 1, **common)  # compile, warm up
-        # the path tracer's frame time is a + b spp (fixed costs per frame): fitted at 2 and 8 spp
-        t2, t8 = (render(scene, "pt", 4, spp=n, seed=7, **common).stats["ms_per_frame"] for n in (2, 8))
-        slope = (t8 - t2) / 6.0
-        a = render(scene, "restir-pt", warm + meas, settings=json.loads(args.settings), **common)
-        spp = max(1, int(round((a.stats["ms_per_frame"] - (t2 - 2 * slope)) / slope)))
-        b = render(scene, "pt", warm + meas, spp=spp, **common)
-        fa, fb = (r.frame_images[warm:].astype(np.float64) for r in (a, b))
-        per_a, per_b = (np.mean([relmse(f, ref) for f in fs]) for fs in (fa, fb))
-        acc_a, acc_b = relmse(fa.mean(0), ref), relmse(fb.mean(0), ref)
-        print(f"\n{name} {args.size}x{args.size} max_depth {args.max_depth}: ReSTIR PT {a.stats['ms_per_frame']:.0f} ms "
-              f"per frame; path tracer at equal time {spp} spp ({b.stats['ms_per_frame']:.0f} ms measured)")
-        print(f"  relMSE per frame: ReSTIR PT {per_a:.4f}, path tracer {per_b:.4f}: {per_b / per_a:.2f}x lower")
-        print(f"  relMSE accumulated over {meas} frames: ReSTIR PT {acc_a:.4f}, path tracer {acc_b:.4f}: "
-              f"{acc_b / acc_a:.2f}x")
-        out[name] = {"restir_pt_ms": a.stats["ms_per_frame"], "pt_spp": spp, "pt_ms": b.stats["ms_per_frame"],
-                     "relmse_frame": [per_a, per_b], "relmse_accumulated": [acc_a, acc_b],
-                     "counters": a.stats["counters"], "shifts": a.stats["shifts"]}
+        et = EqualTime(args, spec())
+        for cand, rounds in DI_GRID:
+            r = et.compare({"di.candidates": cand, "di.spatial.rounds": rounds})
+            report(name, args, r, f", DI {cand} candidates, {rounds} spatial rounds")
+            out[f"{name} di {cand}x{rounds}"] = r
 
 
 def phase_cap(args, out):
@@ -123,7 +161,7 @@ def phase_cap(args, out):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "quality", "cap", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "quality", "cap", "di", "all"], default="all")
     ap.add_argument("--frames", type=int, default=4)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--size", type=int, default=128)
@@ -139,6 +177,8 @@ def main():
         phase_quality(args, out)
     if args.phase in ("cap", "all"):
         phase_cap(args, out)
+    if args.phase in ("di", "all"):
+        phase_di(args, out)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(out, f, indent=2)
