@@ -21,6 +21,16 @@ STAGE_PT_PATHS = wp.constant(30)     # ReSTIR PT's base paths (keyed further by 
 STAGE_PT_RIS = wp.constant(31)       # ReSTIR PT's streaming-RIS selections (never the paths' stream)
 STAGE_PT_TEMPORAL = wp.constant(32)
 STAGE_PT_SPATIAL = wp.constant(40)   # + round index, round < MAX_SPATIAL_ROUNDS
+STAGE_SR_PREFIX = wp.constant(50)           # Suffix ReSTIR: the prefixes traced for temporal prefix reuse
+STAGE_SR_PREFIX_TEMPORAL = wp.constant(51)  # its selections
+STAGE_SR_SUFFIX = wp.constant(52)           # the suffixes traced at the resampled prefix ends (keyed as PT's base paths)
+STAGE_SR_SUFFIX_RIS = wp.constant(53)       # their streaming-RIS selections
+STAGE_SR_SUFFIX_TEMPORAL = wp.constant(54)
+STAGE_SR_GATHER_PREFIX = wp.constant(55)    # the final gather's fresh prefixes (keyed by sample and prefix)
+STAGE_SR_GATHER_SUFFIX = wp.constant(56)    # the final gather's canonical suffix
+STAGE_SR_GATHER_RIS = wp.constant(57)       # its streaming-RIS selections
+STAGE_SR_GATHER_FALLBACK = wp.constant(58)  # gather slots the search left empty: random screen neighbours
+STAGE_SR_SUFFIX_SPATIAL = wp.constant(60)   # + round index, round < MAX_SPATIAL_ROUNDS
 STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (0 < j < 256)
 
 MAX_SPATIAL_ROUNDS = 8
@@ -38,6 +48,16 @@ STAGE_RANGES = (
     ("pt_ris", STAGE_PT_RIS, 1),
     ("pt_temporal", STAGE_PT_TEMPORAL, 1),
     ("pt_spatial", STAGE_PT_SPATIAL, MAX_SPATIAL_ROUNDS),
+    ("sr_prefix", STAGE_SR_PREFIX, 1),
+    ("sr_prefix_temporal", STAGE_SR_PREFIX_TEMPORAL, 1),
+    ("sr_suffix", STAGE_SR_SUFFIX, 1),
+    ("sr_suffix_ris", STAGE_SR_SUFFIX_RIS, 1),
+    ("sr_suffix_temporal", STAGE_SR_SUFFIX_TEMPORAL, 1),
+    ("sr_gather_prefix", STAGE_SR_GATHER_PREFIX, 1),
+    ("sr_gather_suffix", STAGE_SR_GATHER_SUFFIX, 1),
+    ("sr_gather_ris", STAGE_SR_GATHER_RIS, 1),
+    ("sr_gather_fallback", STAGE_SR_GATHER_FALLBACK, 1),
+    ("sr_suffix_spatial", STAGE_SR_SUFFIX_SPATIAL, MAX_SPATIAL_ROUNDS),
     ("path_nee", STAGE_PATH_NEE + 1, MAX_NEE_SAMPLES - 1),
 )
 
@@ -98,6 +118,18 @@ PT_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
 # spatial: as ReSTIR DI's (one stream per round)
 PT_MAX_NEIGHBORS = DI_MAX_NEIGHBORS
 
+# ----------------------------------------------------------------------------- Suffix ReSTIR
+# Prefixes and suffixes are keyed per path as ReSTIR PT's base paths (their bounce layout, the
+# suffix's counted from the prefix end); the gather's fresh prefix i of sample s is path
+# s * SR_MAX_GATHER_PREFIXES + i. Prefix temporal reuse: s * SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE +
+# {0: the current prefix's selection, 1: the history's}; suffix temporal and spatial reuse: as
+# ReSTIR PT's. Gather fallback: slot m of prefix i of sample s uses
+# (s * SR_MAX_GATHER_PREFIXES + i) * SR_FALLBACK_DIMS_PER_PREFIX + 2 m + {0, 1} (the disk offset).
+SR_MAX_GATHER_PREFIXES = wp.constant(16)
+SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
+SR_FALLBACK_DIMS_PER_PREFIX = wp.constant(16)
+SR_MAX_GATHER_SUFFIXES = 8
+
 # (stage, numbers per sample, [(first, count) of each use within one sample at the largest settings])
 DIM_LAYOUTS = (
     ("camera", CAMERA_DIMS_PER_SAMPLE, [(0, 2)]),
@@ -121,4 +153,8 @@ DIM_LAYOUTS = (
     ("pt_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
      [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(PT_MAX_NEIGHBORS)
       for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
+    ("sr_prefix_temporal", SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
+    ("sr_gather_fallback", SR_MAX_GATHER_PREFIXES * SR_FALLBACK_DIMS_PER_PREFIX,
+     [(i * SR_FALLBACK_DIMS_PER_PREFIX + 2 * m, 2) for i in range(SR_MAX_GATHER_PREFIXES)
+      for m in range(SR_MAX_GATHER_SUFFIXES)]),
 )

@@ -2,5 +2,6 @@
 from .path import PathTracer
 from .restir_di.pipeline import ReSTIRDI
 from .restir_pt.pipeline import ReSTIRPT
+from .suffix_restir.pipeline import SuffixReSTIR
 
-METHODS = {"pt": PathTracer, "restir-di": ReSTIRDI, "restir-pt": ReSTIRPT}
+METHODS = {"pt": PathTracer, "restir-di": ReSTIRDI, "restir-pt": ReSTIRPT, "suffix-restir": SuffixReSTIR}

@@ -18,6 +18,12 @@ KERNEL_MODULES = [
     "restir.integrators.restir_pt.s2_temporal",
     "restir.integrators.restir_pt.s3_spatial",
     "restir.integrators.restir_pt.s4_shade",
+    "restir.integrators.suffix_restir.s1_prefix",
+    "restir.integrators.suffix_restir.search",
+    "restir.integrators.suffix_restir.s3_suffix",
+    "restir.integrators.suffix_restir.s4_suffix_temporal",
+    "restir.integrators.suffix_restir.s5_suffix_spatial",
+    "restir.integrators.suffix_restir.s6_gather",
 ]
 
 

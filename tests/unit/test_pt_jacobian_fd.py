@@ -351,6 +351,12 @@ def fd_jacobians(name, shift, mutation="none", offset=(5, 3)):
                               settings={"shift": shift, "direct": "pt", "temporal": False, "spatial.rounds": 0})
     integ = make_integrator(scene, cfg)
     integ.render_frame(0)
+    return run_fd(integ, integ.params(0, 0), integ.gbuffers.previous, integ.reservoirs.previous, mutation, offset)
+
+
+def run_fd(integ, params, gb, reservoirs, mutation="none", offset=(5, 3)):
+    """The finite-difference kernel over every pixel with partner (x + dx, y + dy): domains from
+    `gb` (primary hits; for suffixes, prefix ends), paths `reservoirs`; the rows of shifted paths."""
     n, w, h = integ.num_pixels, integ.width, integ.height
     idx = np.arange(n)
     x, y = idx % w, idx // w
@@ -358,8 +364,7 @@ def fd_jacobians(name, shift, mutation="none", offset=(5, 3)):
     partner = (np.where(y + dy < h, y + dy, y - dy) * w + np.where(x + dx < w, x + dx, x - dx)).astype(np.int32)
     out = wp.zeros((n, N_OUT), dtype=float, device=integ.device)
     wp.launch(fd_kernel(mutation), dim=n, device=integ.device,
-              inputs=[integ.dscene.scene, integ.params(0, 0), integ.gbuffers.previous, integ.reservoirs.previous,
-                      wp.array(partner, dtype=int, device=integ.device), out])
+              inputs=[integ.dscene.scene, params, gb, reservoirs, wp.array(partner, dtype=int, device=integ.device), out])
     o = out.numpy()
     return o[o[:, 0] > 0]
 

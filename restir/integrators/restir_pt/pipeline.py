@@ -12,7 +12,7 @@ from ..base import Integrator
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
-from ..restir_di.pipeline import ReSTIRDI
+from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC, attach_direct_light, check_di_settings
 from .params import SHIFTS, PTRParams
 from .path_sample import PathReservoir
 from .s1_initial import initial_kernel, make_initial_kernel
@@ -50,14 +50,19 @@ def stage_kernels(mutation: str) -> tuple:
     return _mutant_kernels[mutation]
 
 
-# ReSTIR DI's settings as the di.* settings of its direct-light component, with lighter defaults
-# than ReSTIR DI's own (32 light candidates, 2 spatial rounds): measured at equal time on the
-# indirect room, veach-bidir and the glossy box (BENCHMARKS.md, "ReSTIR DI inside ReSTIR PT"),
-# 8 candidates and 1 round leave ReSTIR PT's error unchanged (within 0.3%) and its frame 17-33%
-# cheaper; the direct light's share of the error is small beside the indirect paths' and the
-# one camera sample's.
-DI_DEFAULTS_IN_PT = {"candidates": 8, "spatial.rounds": 1}
-DI_SETTINGS = {f"di.{k}": DI_DEFAULTS_IN_PT.get(k, v) for k, v in ReSTIRDI.SETTINGS.items() if k != "debug.mutation"}
+def summarize_shifts(shift_counts: dict) -> tuple[dict, list]:
+    """Per pass, the shifts of reconnections (paths with an rc vertex) and pure replays: tried,
+    succeeded and the success rate; and the passes whose shifts never succeeded ("reuse dead":
+    reuse that does nothing is reported, not passed; TESTING.md 5.6)."""
+    shifts, dead = {}, []
+    for stage, c in shift_counts.items():
+        kinds = {}
+        for name, (tried, ok) in (("reconnection", c[0:2]), ("replay", c[2:4])):
+            kinds[name] = {"tried": int(tried), "succeeded": int(ok), "success_rate": float(ok / tried) if tried else None}
+        shifts[stage] = kinds
+        if c[0] + c[2] > 0 and c[1] + c[3] == 0:
+            dead.append(stage)
+    return shifts, dead
 
 
 class ReSTIRPT(Integrator):
@@ -84,7 +89,7 @@ class ReSTIRPT(Integrator):
         "rc.near_distance": "hybrid: shortest reconnection segment, scene units",
         "rc.roughness": "hybrid: glossy lobes with a linear roughness above this are rough",
         "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
-        **{k: "ReSTIR DI's " + ReSTIRDI.SETTINGS_DOC[k[3:]] for k in DI_SETTINGS},
+        **DI_SETTINGS_DOC,
     }
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
     SPATIAL_RADIUS_1080 = 20.0
@@ -111,15 +116,7 @@ class ReSTIRPT(Integrator):
             raise ConfigError(f"debug.mutation must be one of {', '.join(MUTATIONS)}")
         if settings["max_depth"] > PT_MAX_DEPTH:
             raise ConfigError(f"restir-pt renders max_depth up to {PT_MAX_DEPTH} (or -1)")
-        ReSTIRDI.check_settings(ReSTIRPT.di_settings(settings))
-
-    @staticmethod
-    def di_settings(settings: dict) -> dict:
-        out = {k[3:]: v for k, v in settings.items() if k.startswith("di.")}
-        out.update({k: settings[k] for k in ("seed", "spp", "camera_motion", "camera_speed", "rr_depth",
-                                             "hide_emitters") if k in settings})
-        out.update(max_depth=2, **{"debug.mutation": "none"})
-        return out
+        check_di_settings(settings)
 
     def kernels(self) -> tuple:
         return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
@@ -145,16 +142,7 @@ class ReSTIRPT(Integrator):
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
         self.prev_camera = None
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
-        self.di = None
-        if s["direct"] == "restir-di" and s["max_depth"] >= 2:
-            self.di = ReSTIRDI(self.dscene, self.di_settings(s), str(self.device), self.slices,
-                               primary=(self.gbuffers, self.primary_weight, self.emission))
-            self.di.stage_prefix = "di."
-            self.di.timer = self.timer
-            self.di.counters = self.counters
-            self.di.events = self.events
-            del self.di.buffers.bytes["events"]
-            self.buffers.bytes.update({f"di.{k}": v for k, v in self.di.buffers.bytes.items()})
+        self.di = attach_direct_light(self)
         # the first vertex whose events ReSTIR PT resamples; paths need max_depth >= first + 2
         self.first_event = 1 if s["direct"] == "restir-di" else 0
         self.resamples = s["max_depth"] >= self.first_event + 2
@@ -234,15 +222,7 @@ class ReSTIRPT(Integrator):
         out = super().stats()
         if self.di is not None:
             out["rays"] += self.di.rays
-        shifts, dead = {}, []
-        for stage, c in self.shift_counts.items():
-            kinds = {}
-            for name, (tried, ok) in (("reconnection", c[0:2]), ("replay", c[2:4])):
-                kinds[name] = {"tried": int(tried), "succeeded": int(ok),
-                               "success_rate": float(ok / tried) if tried else None}
-            shifts[stage] = kinds
-            if c[0] + c[2] > 0 and c[1] + c[3] == 0:
-                dead.append(stage)
+        shifts, dead = summarize_shifts(self.shift_counts)
         total = self.origins.sum()
         out["shifts"] = shifts
         out["reuse_dead"] = dead

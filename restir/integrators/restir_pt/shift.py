@@ -17,7 +17,9 @@ with G = |cos theta_z| / d^2 and p_l single-lobe pdfs; the z factor is left out 
 scatter (NEE at z, z an emitter; the environment has no G). The source terms come from the
 record (rc_jac); the returned record carries the destination's (6 item 3).
 
-The shift fails (valid = 0, J = 0) when the replay does not reach rcPrev, when the destination
+The shift fails (valid = 0, J = 0) when the path is longer than the destination domain holds
+(params.max_depth: the same for every ReSTIR PT pixel, max_depth - P for a suffix domain of
+Suffix ReSTIR), when the replay does not reach rcPrev, when the destination
 path would pick a different rc vertex (an earlier vertex qualifies, or rcPrev/z do not: the
 hybrid shift is then no bijection, 6 item 9), when z is occluded or behind a surface, and when
 the result is not a finite positive number. A failed shift is still an input: its M counts and
@@ -289,6 +291,8 @@ def make_shift(mutation: str = "none"):
         res = ShiftResult()
         if not holds_path(r) or dst.valid == 0:
             return res
+        if path_length(r.flags) + 2 > params.max_depth:
+            return res  # longer than the destination domain holds (suffix domains: max_depth - P)
         rcl = rc_length(r.flags)
         n = path_length(r.flags)
         if rcl != NO_RC:

@@ -1,0 +1,27 @@
+"""Per-frame values of the Suffix ReSTIR stages (runtime, not compile-time)."""
+import warp as wp
+
+from ..restir_pt.params import PTRParams
+
+GATHER_TALBOT = wp.constant(0)    # generalized balance over the neighbours and the canonical technique
+GATHER_PAIRWISE = wp.constant(1)  # pairwise between each neighbour and the canonical technique
+GATHER_MIS = {"talbot": GATHER_TALBOT, "pairwise": GATHER_PAIRWISE}
+
+
+@wp.struct
+class SRParams:
+    # the suffixes' ReSTIR PT parameters: shift kind, rc criteria (near_distance scaled with the
+    # scene), candidates, max_depth (the whole path's: a suffix domain's budget is max_depth - P),
+    # first_event (the first event a prefix leaves to the suffixes' side: 0 or 1, as ReSTIR PT's),
+    # the suffix temporal cap and the suffix spatial neighbours/radius/round
+    pt: PTRParams
+    min_prefix: int           # the prefix end's smallest vertex index P (prefix.min_length)
+    short_segment: float      # a prefix end reached over a segment this short is rejected (scene units)
+    prefix_cap: float         # prefix temporal reuse: history M capped to this x the current M
+    suffix_cap: float         # suffix temporal reuse: history M capped to this (absolute; <= 0: none)
+    gather_prefixes: int      # N fresh prefixes per pixel
+    gather_suffixes: int      # M neighbour suffixes per prefix
+    gather_mis: int           # GATHER_TALBOT or GATHER_PAIRWISE
+    gather_cap: float         # neighbour confidences capped to this in the gather (absolute)
+    box_scale: float          # a prefix end's search box half-size = box_scale x its path footprint
+    fallback_radius: float    # unfilled gather slots: random pixels in a disk of this radius (px)
