@@ -155,3 +155,24 @@ def test_restir_pt_is_independent_of_slicing(slices):
 def test_restir_pt_in_place_spatial_output_is_caught():
     """Mutation: ReSTIR PT's spatial pass writing the buffer it reads (see above)."""
     assert not np.array_equal(render_pt(1, "spatial_in_place"), render_pt(7, "spatial_in_place", reverse=True))
+
+
+def render_sr(slices, mutation="none", reverse=False):
+    scene = restir.load_scene("builtin:indirect-room", width=24, height=20)
+    cfg = restir.RenderConfig(method="suffix-restir", spp=2, frames=2, seed=3, slices=slices,
+                              debug_reverse_launch=reverse, max_depth=4,
+                              settings={"suffix.spatial.rounds": 2, "suffix.spatial.neighbors": 4,
+                                        "gather.suffixes": 3, "debug.mutation": mutation})
+    return restir.render(scene, cfg).image
+
+
+@pytest.mark.parametrize("slices", [1, 7, 480])
+def test_suffix_restir_is_independent_of_slicing(slices):
+    """R2 for Suffix ReSTIR (prefix, suffix and gather passes, the search structure, ReSTIR DI)."""
+    assert np.array_equal(render_sr(2), render_sr(slices))
+    assert np.array_equal(render_sr(2), render_sr(slices, reverse=True))
+
+
+def test_suffix_restir_in_place_spatial_output_is_caught():
+    """Mutation: the suffix spatial pass writing the buffer it reads (see above)."""
+    assert not np.array_equal(render_sr(1, "spatial_in_place"), render_sr(7, "spatial_in_place", reverse=True))

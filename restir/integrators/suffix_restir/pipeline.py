@@ -31,13 +31,13 @@ from .search import boxes_kernel
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of a stage kernel that
 # the harness refuses unless asked; the shipped kernels are built with none of them.
-MUTATIONS = ("none", *SUFFIX_MUTATIONS, *GATHER_MUTATIONS)
+MUTATIONS = ("none", *SUFFIX_MUTATIONS, *GATHER_MUTATIONS, "spatial_in_place")
 _mutant_kernels: dict = {}
 
 
 def stage_kernels(mutation: str) -> tuple:
     """(suffix, gather) kernels of a build: the shipped ones, or a mutation's (built once)."""
-    if mutation == "none":
+    if mutation in ("none", "spatial_in_place"):  # the race is a build of the pipeline, not of a kernel
         return suffix_kernel, gather_kernel
     if mutation not in _mutant_kernels:
         if mutation in SUFFIX_MUTATIONS:
@@ -263,7 +263,8 @@ class SuffixReSTIR(Integrator):
                 for rd in range(self.settings["suffix.spatial.rounds"]):
                     p.pt.spatial_round = rd
                     self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
-                                    [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current])
+                                    [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
+                                    self.settings["debug.mutation"] == "spatial_in_place")
                 # ---- the final gather
                 self.run_stage("gather", gather,
                                [sc, p, gb.current, self.bvh.id, self.lowers, self.uppers, self.prefixes.current,
