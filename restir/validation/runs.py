@@ -93,6 +93,8 @@ class Validation:
             return None
         if not all(r.pixel_conclusive for r in self.report.reports):
             return "pixel statistics too skewed to judge"
+        if not all(r.tile_conclusive for r in self.report.reports):
+            return "tile statistics too skewed to judge"
         mdb = self.report.mdb
         if not mdb <= self.max_mdb:  # also NaN
             need = self.runs_needed

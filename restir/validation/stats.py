@@ -134,6 +134,21 @@ class ZTestReport:
         if agg_var is not None:
             tv = tile_v[..., None]
         self.tile_z = self._z(tm - tr, tr, np.sqrt(tv)).ravel()
+        # Skewness guard for tiles as for pixels (below): with batches, a tile whose per-batch
+        # mean has |skew| > 1 on either side is not judged, and the tile level is inconclusive
+        # when the median tile is (reuse spreads a firefly over its neighbours, so a tile's
+        # batch means can stay as heavy-tailed as its pixels').
+        self.tile_skew = 0.0
+        if batches is not None:
+            tsk = np.abs(self._tile_skewness(batches, tile))
+            if ref_batches is not None:
+                tsk = np.maximum(tsk, np.abs(self._tile_skewness(ref_batches, tile)))
+            self.tile_skew = float(np.median(tsk))
+            self.tiles_inconclusive = int(np.sum(tsk > 1.0))
+            self.tile_z = np.where(tsk.ravel() > 1.0, 0.0, self.tile_z)
+        else:
+            self.tiles_inconclusive = 0
+        self.tile_conclusive = self.tile_skew <= 1.0
         self.pixel_z = self._z(mean - ref, ref, np.sqrt(v))
         # Image and tile variances summed over many independent pixels have many degrees of
         # freedom (normal quantiles); estimated from B batch means they have B - 1 (t quantiles,
@@ -173,6 +188,16 @@ class ZTestReport:
         self.mdb = mdb(self.image_crit, self.image_se, self.image_ref)
 
     @staticmethod
+    def _tile_skewness(batches, tile):
+        """Skewness over the B batches of each tile's mean."""
+        b = np.asarray(batches, np.float64)
+        n = b.shape[0]
+        h, w = b.shape[1] - b.shape[1] % tile, b.shape[2] - b.shape[2] % tile
+        tiles = b[:, :h, :w].reshape(n, h // tile, tile, w // tile, tile).mean(axis=(2, 4))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.nan_to_num(sps.skew(tiles, axis=0))
+
+    @staticmethod
     def _aggregate_variances(batches, tile):
         """Variance of the mean over B batches of the image mean and of each tile mean."""
         b = np.asarray(batches, np.float64)
@@ -190,11 +215,13 @@ class ZTestReport:
     def passed(self) -> bool:
         pixels_ok = (np.all(np.abs(self.pixel_z) < self.pixel_crit) and (self.tail <= self.tail_limit or not self.tail_conclusive)) \
             or not self.pixel_conclusive
-        return abs(self.image_z) < self.image_crit and bool(np.all(np.abs(self.tile_z) < self.tile_crit)) and bool(pixels_ok)
+        tiles_ok = bool(np.all(np.abs(self.tile_z) < self.tile_crit)) or not self.tile_conclusive
+        return abs(self.image_z) < self.image_crit and tiles_ok and bool(pixels_ok)
 
     def __str__(self) -> str:
         return (f"image {self.image_mean:.6g} vs {self.image_ref:.6g} (z={self.image_z:+.2f}, crit {self.image_crit:.2f}, "
-                f"MDB {100 * self.mdb:.3f}%); max|z| tiles {np.abs(self.tile_z).max():.2f} (crit {self.tile_crit:.2f}), "
+                f"MDB {100 * self.mdb:.3f}%); max|z| tiles {np.abs(self.tile_z).max():.2f} (crit {self.tile_crit:.2f})"
+                f"{f' ({self.tiles_inconclusive} skewed tiles not judged' + ('; tile level inconclusive)' if not self.tile_conclusive else ')') if self.tiles_inconclusive else ''}, "
                 f"pixels {np.abs(self.pixel_z).max():.2f} (crit {self.pixel_crit:.2f}); tail fraction {self.tail:.4f} "
                 f"(limit {self.tail_limit:.4f}); "
                 f"median |skew| {self.skew:.2f} ({self.pixels_inconclusive} skewed or degenerate pixels not judged), "

@@ -66,3 +66,20 @@ def test_harness_refuses_fault_injection():
     with pytest.raises(AssertionError, match="fault injection"):
         IndependentRuns(scene, cfg, 2)
     assert IndependentRuns(scene, cfg, 2, allow_mutation=True).counters["nonfinite_weights"] == 0
+
+
+def test_skewed_tiles_are_not_judged():
+    """TESTING.md 5.2's skew guard at the tile level: with heavy-tailed batch means (lognormal,
+    sigma 2: tile skew far above 1) no tile is judged and the tile level is inconclusive, while
+    normal batches are judged (and a 10% bias in one tile of them fails)."""
+    from restir.validation.stats import ZTestReport
+
+    rng = np.random.default_rng(4)
+    heavy_a, heavy_b = rng.lognormal(0, 2.0, (2, 128, 32, 32))
+    r = ZTestReport(heavy_a.mean(0), heavy_a.var(0, ddof=1) / 128, heavy_b.mean(0), heavy_b.var(0, ddof=1) / 128,
+                    batches=heavy_a, ref_batches=heavy_b)
+    assert not r.tile_conclusive and r.tiles_inconclusive == 16
+    a, b = rng.normal(1.0, 0.1, (2, 128, 32, 32))
+    a[:, :8, :8] *= 1.1
+    r = ZTestReport(a.mean(0), a.var(0, ddof=1) / 128, b.mean(0), b.var(0, ddof=1) / 128, batches=a, ref_batches=b)
+    assert r.tile_conclusive and r.tiles_inconclusive == 0 and not r.passed and np.abs(r.tile_z).max() > r.tile_crit

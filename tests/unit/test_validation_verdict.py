@@ -8,9 +8,9 @@ from restir.validation.runs import DEFAULT_MAX_MDB, Validation
 
 
 class Report:
-    def __init__(self, passed=True, mdb=0.01, conclusive=True):
+    def __init__(self, passed=True, mdb=0.01, conclusive=True, tiles_conclusive=True):
         self.passed, self.mdb = passed, mdb
-        self.reports = [type("R", (), {"pixel_conclusive": conclusive})()] * 3
+        self.reports = [type("R", (), {"pixel_conclusive": conclusive, "tile_conclusive": tiles_conclusive})()] * 3
 
 
 class Runs:
@@ -48,3 +48,8 @@ def test_runs_needed():
     assert Validation(Report(mdb=0.01), Runs(32), Runs(32)).runs_needed == 32  # already enough
     assert Validation(Report(mdb=math.inf), Runs(8), Runs(8)).runs_needed is None
     assert "3462 runs" in Validation(Report(mdb=1.04), Runs(8), Runs(8)).reason
+
+
+def test_skewed_tiles_stay_inconclusive():
+    v = Validation(Report(mdb=0.01, tiles_conclusive=False), Runs(8), Runs(8))
+    assert v.verdict == "inconclusive" and "tile" in v.reason

@@ -1,0 +1,55 @@
+"""Slow tier: the Suffix ReSTIR stage matrix (TESTING.md 5.6, C5) against the path tracer at the same
+max_depth, with independent runs on both sides, on the scenes of the ReSTIR PT matrix and with its
+runs per scene (test_restir_pt_matrix.py: K runs x T frames at 32x32, the path tracer's reference
+rendered once per scene and camera motion; the emissive-cap sphere against its exact value).
+
+Configurations: the final gather alone (prefix and suffix reuse off) for N in {1, 2, 4} prefixes
+and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
+(each with the gather); everything (the defaults); the orbiting and dollying camera; the
+reconnection and replay shifts; direct=pt; the pairwise gather. Welch z per channel at image,
+tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
+"""
+import pytest
+
+from restir.scene.builtin import sphere_cap_radiance
+from restir.validation import IndependentRuns
+from tests.integration.test_path_tracer import ANALYTIC_REL_TOL, check
+from tests.integration.test_restir_pt_matrix import CAMERA_SPEED, SCENES, SIZE, reference
+
+import restir
+
+NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
+MATRIX = {
+    **{f"C5-gather-N{n}-M{m}": ({**NO_REUSE, "gather.prefixes": n, "gather.suffixes": m}, "none")
+       for n in (1, 2, 4) for m in (1, 4, 8)},
+    "C5-prefix-temporal": ({**NO_REUSE, "prefix.temporal": True}, "none"),
+    "C5-suffix-temporal": ({**NO_REUSE, "suffix.temporal": True}, "none"),
+    "C5-suffix-spatial": ({**NO_REUSE, "suffix.spatial.rounds": 1}, "none"),
+    "C5-all": ({}, "none"),
+    "C5-orbit": ({}, "orbit"),
+    "C5-dolly": ({}, "dolly"),
+    "C5-reconnection": ({"shift": "reconnection"}, "none"),
+    "C5-replay": ({"shift": "replay"}, "none"),
+    "C5-direct-pt": ({"direct": "pt"}, "none"),
+    "C5-pairwise-M4": ({"gather.mis": "pairwise", "gather.suffixes": 4}, "none"),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", list(MATRIX))
+@pytest.mark.parametrize("name", list(SCENES))
+def test_suffix_restir_matrix(name, config):
+    settings, motion = MATRIX[config]
+    load, depth, bound, runs, frames = SCENES[name]
+    cfg = restir.RenderConfig(method="suffix-restir", spp=1, frames=frames, width=SIZE, height=SIZE, max_depth=depth,
+                              settings=settings, camera_motion=motion, camera_speed=CAMERA_SPEED[motion])
+    r = IndependentRuns(load(), cfg, runs, 100)
+    assert all(s["settings"]["debug.mutation"] == "none" for s in r.stats)
+    assert not any(s["reuse_dead"] for s in r.stats), r.stats[0]["shifts"]
+    if name == "sphere-cap":
+        rep = check(r, sphere_cap_radiance(0.5, 1.0, 0.05, depth), rel_tol=ANALYTIC_REL_TOL)
+    else:
+        ref = reference(name, motion)
+        rep = check(r, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    print(name, config, f"K={runs} T={frames} MDB={rep.mdb:.4f}", r.stats[0]["shifts"], r.stats[0]["gather_slots"])
+    assert rep.mdb < bound
