@@ -77,14 +77,15 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("render", help="render a scene", formatter_class=_Formatter, epilog=_builtins_epilog())
     r.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
     r.add_argument("--method", default="pt", help="pt (path tracer), restir-di (direct light: emission plus one "
-                   "bounce; docs/restir_di.md) or restir-pt (path reuse; docs/restir_pt.md); settings with --set, "
+                   "bounce; docs/restir_di.md), restir-pt (path reuse; docs/restir_pt.md) or suffix-restir "
+                   "(conditional suffix reuse with a final gather; docs/suffix_restir.md); settings with --set, "
                    "listed by `restir info`")
     r.add_argument("--spp", type=int, help="samples per pixel per frame (default: the scene's)")
     r.add_argument("--frames", type=int, default=1, help="frames to render and average")
     r.add_argument("--width", type=int, help="image width in pixels (default: the scene's)")
     r.add_argument("--height", type=int, help="image height in pixels (default: the scene's)")
     r.add_argument("--max-depth", type=int, help="Mitsuba's max_depth, -1: unbounded (default: the scene's; "
-                   "restir-di computes 2 only; restir-pt up to 64)")
+                   "restir-di computes 2 only; restir-pt and suffix-restir up to 64)")
     r.add_argument("--seed", type=int, default=0, help="random seed")
     r.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
     r.add_argument("--tracer", default="auto", choices=["auto", "embree", "warp"],

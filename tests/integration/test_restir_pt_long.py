@@ -29,19 +29,19 @@ def sphere(size=16):
     return restir.load_scene("builtin:sphere-cap", width=size, height=size, **CAP)
 
 
-def run_means(settings, runs=32, frames=8):
+def run_means(settings, runs=32, frames=8, method="restir-pt"):
     """Per-run image means (non-emitting pixels only: the cap is seen in a few) and the z-test."""
-    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=frames, max_depth=DEPTH, settings=settings)
+    cfg = restir.RenderConfig(method=method, spp=1, frames=frames, max_depth=DEPTH, settings=settings)
     r = IndependentRuns(sphere(), cfg, runs, 300)
     rep = check(r, EXACT, rel_tol=ANALYTIC_REL_TOL)
     inside = np.abs(r.image.mean(-1) - EXACT) < 0.5 * EXACT
     return r.batches[:, inside].astype(np.float64).mean(axis=(1, 2)), rep.mdb
 
 
-def check_flat(values, settings_of):
+def check_flat(values, settings_of, method="restir-pt"):
     means, ses = [], []
     for v in values:
-        m, mdb = run_means(settings_of(v))
+        m, mdb = run_means(settings_of(v), method=method)
         means.append(m.mean())
         ses.append(m.std(ddof=1) / np.sqrt(len(m)))
         print(v, f"mean {means[-1]:.6f} +- {ses[-1]:.6f} (exact {EXACT:.6f}), MDB {mdb:.4f}")
@@ -73,12 +73,15 @@ def test_invariance_in_rounds():
 
 def test_every_frame_is_unbiased():
     """L1: frames 0, 1, 2, 4, 8, 15 each unbiased over 48 independent runs (defaults)."""
+    check_every_frame("restir-pt")
+
+
+def check_every_frame(method, runs=48, frames_t=(0, 1, 2, 4, 8, 15)):
     from restir.validation.stats import RGBZTest
 
-    runs, frames_t = 48, [0, 1, 2, 4, 8, 15]
     imgs = []
     for k in range(runs):
-        cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=16, seed=2000 + k, max_depth=DEPTH,
+        cfg = restir.RenderConfig(method=method, spp=1, frames=max(frames_t) + 1, seed=2000 + k, max_depth=DEPTH,
                                   keep_frames=True)
         imgs.append(restir.render(sphere(), cfg).frame_images)
     imgs = np.stack(imgs).astype(np.float64)

@@ -83,3 +83,23 @@ def test_skewed_tiles_are_not_judged():
     a[:, :8, :8] *= 1.1
     r = ZTestReport(a.mean(0), a.var(0, ddof=1) / 128, b.mean(0), b.var(0, ddof=1) / 128, batches=a, ref_batches=b)
     assert r.tile_conclusive and r.tiles_inconclusive == 0 and not r.passed and np.abs(r.tile_z).max() > r.tile_crit
+
+
+def test_tail_check_looks_for_local_biases():
+    """The tail fraction (|z| > 3) is taken after the image's common relative deviation is taken
+    out: a whole-image shift of 2.5 standard errors per pixel (the image test's to judge: here
+    well inside its threshold, the pixels being correlated) passes it, while 6% of the pixels
+    biased by 4 standard errors fail it."""
+    from restir.validation.stats import ZTestReport
+
+    rng = np.random.default_rng(8)
+    k = 64
+    common = rng.normal(0, 1, (k, 1, 1))  # one shift per run, shared by every pixel
+    a = 1.0 + 0.01 * (0.3 * rng.normal(size=(k, 32, 32)) + common)
+    shifted = a - a.mean() + 1.0 - 2.5 * a.std(0, ddof=1).mean() / np.sqrt(k)
+    r = ZTestReport(shifted.mean(0), shifted.var(0, ddof=1) / k, 1.0, 0.0, batches=shifted, df=k - 1)
+    assert r.tail <= r.tail_limit and r.passed
+    b = 1.0 + 0.01 * rng.normal(size=(k, 32, 32))
+    b[:, :8, :8] += 4 * 0.01 / np.sqrt(k)
+    r = ZTestReport(b.mean(0), b.var(0, ddof=1) / k, 1.0, 0.0, batches=b, df=k - 1)
+    assert r.tail > r.tail_limit and not r.passed
