@@ -28,7 +28,7 @@ from restir.integrators.suffix_restir.domains import Domain, load_domain, suffix
 from restir.integrators.suffix_restir.params import SRParams
 from restir.integrators.suffix_restir.prefix import PrefixReservoir, prefix_end_shading, trace_prefix
 from restir.integrators.suffix_restir.s6_gather import canonical_suffix, fill_slots, make_gather
-from restir.integrators.suffix_restir.search import NO_PIXEL, nearest_prefix_ends
+from restir.integrators.suffix_restir.search import NO_PIXEL, SearchStructure, nearest_prefix_ends
 
 TOL = 1e-4
 N_OUT = 4  # [tested, sum of weights, techniques that produce y besides the canonical, slots whose reservoir is empty]
@@ -45,8 +45,7 @@ def make_kernel(gather):
     _, shift_out = make_reuse_pair(shift_path)
 
     @wp.kernel(module="unique")
-    def gather_mis_kernel(scene: SceneDevice, params: SRParams, gb: GBuffer, bvh: wp.uint64,
-                          lowers: wp.array(dtype=wp.vec3), uppers: wp.array(dtype=wp.vec3),
+    def gather_mis_kernel(scene: SceneDevice, params: SRParams, gb: GBuffer, search: SearchStructure,
                           prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                           suffixes: wp.array(dtype=PathReservoir), width: int, height: int,
                           out: wp.array2d(dtype=float)):
@@ -63,7 +62,7 @@ def make_kernel(gather):
         dst = Domain()
         dst.sh = prefix_end_shading(scene, pf)
         dst.params = suffix_params(params, pf.length)
-        slots = nearest_prefix_ends(bvh, lowers, uppers, pf.hit.p, params.gather_suffixes)
+        slots = nearest_prefix_ends(search, pf.hit.p, params.gather_suffixes)
         slots = fill_slots(slots, params, prefixes, pixel, width, height, key, wp.uint32(100))
         y = canonical_suffix(scene, dst, hash_combine(key, wp.uint32(1)), hash_combine(key, wp.uint32(2))).r
         if not holds_path(y) or y.W <= 0.0:
@@ -107,8 +106,8 @@ def gather_sums(scene_spec, settings, mutation="none", size=48):
     out = wp.zeros((integ.num_pixels, N_OUT), dtype=float, device=integ.device)
     # the last frame's search structure and buffers (its final suffixes and prefixes are now "previous")
     wp.launch(_kernels[mutation], dim=integ.num_pixels, device=integ.device,
-              inputs=[integ.dscene.scene, integ.params(1, 0), integ.gbuffers.previous, integ.bvh.id, integ.lowers,
-                      integ.uppers, integ.prefixes.previous, integ.prefix_gbs.previous, integ.reservoirs.previous,
+              inputs=[integ.dscene.scene, integ.params(1, 0), integ.gbuffers.previous, integ.search,
+                      integ.prefixes.previous, integ.prefix_gbs.previous, integ.reservoirs.previous,
                       integ.width, integ.height, out])
     o = out.numpy()
     return o[o[:, 0] > 0]

@@ -27,7 +27,7 @@ from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
 from .s4_suffix_temporal import suffix_temporal_kernel
 from .s5_suffix_spatial import suffix_spatial_kernel
 from .s6_gather import GATHER_MUTATIONS, gather_kernel, make_gather
-from .search import boxes_kernel
+from .search import SEARCHES, SearchStructure, boxes_kernel
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of a stage kernel that
 # the harness refuses unless asked; the shipped kernels are built with none of them.
@@ -60,7 +60,8 @@ class SuffixReSTIR(Integrator):
                 "prefix.temporal.cap": 50.0, "suffix.temporal": True, "suffix.temporal.cap": 50.0,
                 "suffix.spatial.rounds": 1, "suffix.spatial.neighbors": 3, "suffix.spatial.radius": "auto",
                 "gather.prefixes": 4, "gather.suffixes": 1, "gather.mis": "talbot", "gather.cap": 50.0,
-                "gather.radius": 2.0, "gather.fallback_radius": "auto", "debug.mutation": "none", **DI_SETTINGS}
+                "gather.radius": 2.0, "gather.fallback_radius": "auto", "gather.search": "hashgrid",
+                "debug.mutation": "none", **DI_SETTINGS}
     SETTINGS_DOC = {
         "shift": "the suffix shift: hybrid (replay to the first vertex that qualifies, then reconnect), "
                  "reconnection (at the vertex after the prefix end), replay",
@@ -88,6 +89,8 @@ class SuffixReSTIR(Integrator):
                          "spread angle",
         "gather.fallback_radius": "unfilled gather slots: random pixels in a disk of this radius; auto: 30 px at "
                                   "1080 lines scaled with the height, >= 2",
+        "gather.search": "the prefix search structure: hashgrid (wp.HashGrid over the box centres) or bvh (wp.Bvh "
+                         "over the boxes); both find the same neighbours",
         "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
         **DI_SETTINGS_DOC,
     }
@@ -119,6 +122,8 @@ class SuffixReSTIR(Integrator):
             raise ConfigError(f"gather.suffixes must be in [1, {SR_MAX_GATHER_SUFFIXES}]")
         if s["gather.mis"] not in GATHER_MIS:
             raise ConfigError(f"gather.mis must be one of {', '.join(GATHER_MIS)}")
+        if s["gather.search"] not in SEARCHES:
+            raise ConfigError(f"gather.search must be one of {', '.join(SEARCHES)}")
         if not s["prefix.min_length"] >= 1:
             raise ConfigError("prefix.min_length must be >= 1")
         for k in ("rc.near_distance", "rc.roughness", "prefix.short_segment", "gather.radius"):
@@ -155,10 +160,18 @@ class SuffixReSTIR(Integrator):
         self.fresh_prefix_gb = allocate_gbuffer(self, "prefix_gbuffer_fresh")
         self.prefixes = PingPong(self.buffer("prefixes", PrefixReservoir), self.buffer("prefixes_prev", PrefixReservoir))
         self.prefix_gbs = PingPong(allocate_gbuffer(self, "prefix_gbuffer"), allocate_gbuffer(self, "prefix_gbuffer_prev"))
-        # the search structure: a box per pixel
-        self.lowers = self.buffer("search.lowers", wp.vec3)
-        self.uppers = self.buffer("search.uppers", wp.vec3)
-        self.bvh = None
+        # the search structure: a box per pixel (centre and half-size; corners for the BVH)
+        self.search = SearchStructure()
+        self.search.kind = int(SEARCHES[s["gather.search"]])
+        self.search.centers = self.buffer("search.centers", wp.vec3)
+        self.search.halves = self.buffer("search.halves", float)
+        if self.search.kind == SEARCHES["bvh"]:
+            self.lowers = self.buffer("search.lowers", wp.vec3)
+            self.uppers = self.buffer("search.uppers", wp.vec3)
+        else:  # no corners: empty arrays (the boxes kernel writes them only for the BVH)
+            self.lowers = wp.zeros(0, dtype=wp.vec3, device=self.device)
+            self.uppers = wp.zeros(0, dtype=wp.vec3, device=self.device)
+        self.structure = None
         # suffixes
         self.reservoirs = PingPong(self.buffer("suffixes", PathReservoir), self.buffer("suffixes_prev", PathReservoir))
         self.pass_out = self.buffer("suffixes_pass", PathReservoir)
@@ -213,15 +226,25 @@ class SuffixReSTIR(Integrator):
         acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
 
     def build_search(self, p: SRParams) -> None:
-        """Stage "search": the boxes, then the BVH over them (rebuilt each frame), one timed stage."""
+        """Stage "search": the boxes, then the structure over them (rebuilt each frame), one timed
+        stage. The hash grid's cell and query radius: the largest box's half-diagonal."""
         sc = self.dscene.scene
         self.run_stage("search", boxes_kernel, [sc, p.box_scale, self.far_point, self.prefixes.current,
-                                                self.prefix_gbs.current], [self.lowers, self.uppers])
+                                                self.prefix_gbs.current],
+                       [self.search.centers, self.search.halves, self.lowers, self.uppers])
         with self.timer.stage(self.stage_prefix + "search", False):
-            if self.bvh is None:
-                self.bvh = wp.Bvh(self.lowers, self.uppers)
+            if self.search.kind == SEARCHES["bvh"]:
+                if self.structure is None:
+                    self.structure = wp.Bvh(self.lowers, self.uppers)
+                else:
+                    self.structure.rebuild()
             else:
-                self.bvh.rebuild()
+                radius = max(float(np.sqrt(3.0) * self.search.halves.numpy().max()), 1e-6 * self.scene_radius)
+                if self.structure is None:
+                    self.structure = wp.HashGrid(128, 128, 128, device=self.device)
+                self.structure.build(self.search.centers, radius)
+                self.search.radius = radius
+            self.search.id = self.structure.id
 
     def render_frame(self, frame: int):
         sc = self.dscene.scene
@@ -267,7 +290,7 @@ class SuffixReSTIR(Integrator):
                                     self.settings["debug.mutation"] == "spatial_in_place")
                 # ---- the final gather
                 self.run_stage("gather", gather,
-                               [sc, p, gb.current, self.bvh.id, self.lowers, self.uppers, self.prefixes.current,
+                               [sc, p, gb.current, self.search, self.prefixes.current,
                                 self.prefix_gbs.current, res.current, self.width, self.height, direct,
                                 self.primary_weight], [self.sample_L, self.gather_slots, self.shift_events],
                                nonfinite="nonfinite_outputs")

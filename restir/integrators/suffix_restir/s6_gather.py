@@ -38,7 +38,7 @@ from ..restir_pt.shift import shift_path
 from .domains import Domain, load_domain, suffix_params
 from .params import GATHER_TALBOT, SRParams
 from .prefix import PrefixReservoir, has_prefix, prefix_end_shading, trace_prefix
-from .search import NO_PIXEL, Slots, nearest_prefix_ends
+from .search import NO_PIXEL, SearchStructure, Slots, nearest_prefix_ends
 
 
 @wp.func
@@ -163,8 +163,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
         return m / V
 
     @wp.kernel(module=module)
-    def gather_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer, bvh: wp.uint64,
-                      lowers: wp.array(dtype=wp.vec3), uppers: wp.array(dtype=wp.vec3),
+    def gather_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer, search: SearchStructure,
                       prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                       suffixes: wp.array(dtype=PathReservoir), width: int, height: int, direct: wp.array(dtype=wp.vec3),
                       primary_weight: wp.array(dtype=float), sample_L: wp.array(dtype=wp.vec3),
@@ -192,7 +191,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
                 dst.sh = prefix_end_shading(scene, pf)
                 dst.params = suffix_params(params, pf.length)
                 # ---- the technique set: neighbours by prefix-end geometry only
-                slots = nearest_prefix_ends(bvh, lowers, uppers, pf.hit.p, params.gather_suffixes)
+                slots = nearest_prefix_ends(search, pf.hit.p, params.gather_suffixes)
                 slots = fill_slots(slots, params, prefixes, pixel, width, height, fallback_key,
                                    path_id * wp.uint32(SR_FALLBACK_DIMS_PER_PREFIX))
                 S = wp.vec3(0.0)
