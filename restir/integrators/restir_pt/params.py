@@ -6,6 +6,11 @@ SHIFT_RECONNECTION = wp.constant(1)  # always reconnect at x2 (length 1), no con
 SHIFT_REPLAY = wp.constant(2)        # replay the whole path with the source's random numbers
 SHIFTS = {"hybrid": SHIFT_HYBRID, "reconnection": SHIFT_RECONNECTION, "replay": SHIFT_REPLAY}
 
+# The Warp module of the shipped stage kernels: one module, so that the code they share (the base
+# path, the shift) is compiled once, not once per stage file (the CUDA compile check takes minutes
+# per module). Fault-injected builds go to modules of their own.
+KERNEL_MODULE = "restir_pt"
+
 
 @wp.struct
 class PTRParams:

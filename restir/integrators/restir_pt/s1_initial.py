@@ -14,7 +14,7 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import load_shading
 from .base_path import BasePath, trace_base_path
-from .params import PTRParams
+from .params import KERNEL_MODULE, PTRParams
 from .path_sample import MAX_PATH_LENGTH, PathReservoir, empty_path, store
 
 EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
@@ -24,7 +24,7 @@ def make_initial_kernel(m_per_event: bool = False):
     """The initial kernel; m_per_event builds the mutation that counts M per streamed event (and
     divides W by it), the defect TESTING.md 5.11 lists; the shipped kernel is built without it."""
 
-    @wp.kernel(module="unique" if m_per_event else None)
+    @wp.kernel(module="unique" if m_per_event else KERNEL_MODULE)
     def initial_kernel(offset: int, scene: SceneDevice, params: PTRParams, gb: GBuffer,
                        reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset

@@ -23,7 +23,7 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
-from .params import PTRParams
+from .params import KERNEL_MODULE, PTRParams
 from .path_sample import ORIGIN_TEMPORAL, PathReservoir, store, with_origin
 from .reuse_pair import ShiftTally, make_reuse_pair, tally
 from .shift import shift_path
@@ -37,7 +37,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
     history whose shift failed (its M and its density in the current sample's weight)."""
     shift_in, shift_out = make_reuse_pair(shift, module)
 
-    @wp.kernel(module=module)
+    @wp.kernel(module=module or KERNEL_MODULE)
     def temporal_kernel(offset: int, scene: SceneDevice, params: PTRParams, prev_camera: Camera, gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),

@@ -20,7 +20,7 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_technique
 from ..common.shading import load_shading
-from .params import PTRParams
+from .params import KERNEL_MODULE, PTRParams
 from .path_sample import ORIGIN_SPATIAL, PathReservoir, store, with_origin
 from .reuse_pair import ShiftTally, make_reuse_pair, tally
 from .shift import shift_path
@@ -33,7 +33,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
     neighbours whose shift failed out of the technique set (V, M and the canonical weight)."""
     shift_in, shift_out = make_reuse_pair(shift, module)
 
-    @wp.kernel(module=module)
+    @wp.kernel(module=module or KERNEL_MODULE)
     def spatial_kernel(offset: int, scene: SceneDevice, params: PTRParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                        shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):

@@ -10,10 +10,11 @@ sample came from the pixel's own base path, temporal or spatial reuse; for the s
 import warp as wp
 
 from ..common.events import output_events
+from .params import KERNEL_MODULE
 from .path_sample import PathReservoir, holds_path, origin
 
 
-@wp.kernel
+@wp.kernel(module=KERNEL_MODULE)
 def shade_kernel(offset: int, reservoirs: wp.array(dtype=PathReservoir), direct: wp.array(dtype=wp.vec3),
                  primary_weight: wp.array(dtype=float), sample_L: wp.array(dtype=wp.vec3),
                  origins: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):

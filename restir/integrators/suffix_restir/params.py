@@ -7,6 +7,10 @@ GATHER_TALBOT = wp.constant(0)    # generalized balance over the neighbours and 
 GATHER_PAIRWISE = wp.constant(1)  # pairwise between each neighbour and the canonical technique
 GATHER_MIS = {"talbot": GATHER_TALBOT, "pairwise": GATHER_PAIRWISE}
 
+# The Warp module of the shipped stage kernels (one module: the prefix, base path and shift code
+# they share is compiled once); fault-injected builds go to modules of their own.
+KERNEL_MODULE = "suffix_restir"
+
 
 @wp.struct
 class SRParams:

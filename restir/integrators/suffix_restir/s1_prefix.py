@@ -27,7 +27,7 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
-from .params import SRParams
+from .params import KERNEL_MODULE, SRParams
 from .prefix import NO_PREFIX, PrefixReservoir, has_prefix, prefix_flags, shift_prefix, trace_prefix
 
 CURRENT = wp.constant(0)
@@ -42,7 +42,7 @@ def write_end(gb: GBuffer, pixel: int, tri: int, bary: wp.vec2, dist: float, d: 
     gb.dir[pixel] = d
 
 
-@wp.kernel
+@wp.kernel(module=KERNEL_MODULE)
 def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer,
                   prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
@@ -69,7 +69,7 @@ def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer
     events[pixel] = wp.vec4i(0, 0, 0, rays)
 
 
-@wp.kernel
+@wp.kernel(module=KERNEL_MODULE)
 def prefix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, prev_camera: Camera, gb: GBuffer,
                            prev_gb: GBuffer, fresh: wp.array(dtype=PrefixReservoir), fresh_gb: GBuffer,
                            prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,

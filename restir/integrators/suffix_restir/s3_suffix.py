@@ -17,7 +17,7 @@ from ..restir_pt.base_path import BasePath, trace_base_path
 from ..restir_pt.path_sample import NO_RC, PathReservoir, empty_path, holds_path, rc_length, store
 from ..restir_pt.s1_initial import EVENTS_PER_PATH
 from .domains import load_domain
-from .params import SRParams
+from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, prefix_length
 
 
@@ -28,7 +28,7 @@ def make_suffix_kernel(mutation: str = "none"):
     the suffix was traced with: replay does not restart at x_P, 6 item 11), prefix_thp_in_target
     (the suffix's integrand and target scaled by the prefix's, W divided by it: F W unchanged here,
     but the target is no longer the one shifts evaluate, 6 item 12)."""
-    module = None if mutation == "none" else f"suffix_restir_{mutation}"
+    module = KERNEL_MODULE if mutation == "none" else f"suffix_restir_{mutation}"
     rc_at_prefix = mutation == "rc_index_at_prefix_length"
     seed_not_reset = mutation == "suffix_seed_not_reset"
     thp_in_target = mutation == "prefix_thp_in_target"

@@ -26,7 +26,7 @@ from ..restir_pt.path_sample import ORIGIN_TEMPORAL, PathReservoir, store, with_
 from ..restir_pt.reuse_pair import ShiftTally, make_reuse_pair, tally
 from ..restir_pt.shift import shift_path
 from .domains import load_domain
-from .params import SRParams
+from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir
 
 CURRENT = wp.constant(0)
@@ -36,7 +36,7 @@ HISTORY = wp.constant(1)
 def make_suffix_temporal_kernel(shift=shift_path, module=None):
     shift_in, shift_out = make_reuse_pair(shift, module)
 
-    @wp.kernel(module=module)
+    @wp.kernel(module=module or KERNEL_MODULE)
     def suffix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, prev_camera: Camera, gb: GBuffer,
                                prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                                prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,

@@ -23,14 +23,14 @@ from ..restir_pt.reuse_pair import ShiftTally, make_reuse_pair, tally
 from ..restir_pt.s3_spatial import CANONICAL
 from ..restir_pt.shift import shift_path
 from .domains import load_domain
-from .params import SRParams
+from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir
 
 
 def make_suffix_spatial_kernel(shift=shift_path, module=None):
     shift_in, shift_out = make_reuse_pair(shift, module)
 
-    @wp.kernel(module=module)
+    @wp.kernel(module=module or KERNEL_MODULE)
     def suffix_spatial_kernel(offset: int, scene: SceneDevice, params: SRParams, width: int, height: int,
                               prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                               reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),

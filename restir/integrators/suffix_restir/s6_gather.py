@@ -36,7 +36,7 @@ from ..restir_pt.path_sample import PathReservoir, empty_path, holds_path, store
 from ..restir_pt.reuse_pair import ShiftedIn, ShiftTally, make_reuse_pair, tally
 from ..restir_pt.shift import shift_path
 from .domains import Domain, load_domain, suffix_params
-from .params import GATHER_TALBOT, SRParams
+from .params import GATHER_TALBOT, KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, has_prefix, prefix_end_shading, trace_prefix
 from .search import NO_PIXEL, SearchStructure, Slots, nearest_prefix_ends
 
@@ -162,7 +162,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
                 m += d_c / (d_c + neighbor_density(scene, params, xc, slots, k, prefixes, prefix_gb, suffixes))
         return m / V
 
-    @wp.kernel(module=module)
+    @wp.kernel(module=module or KERNEL_MODULE)
     def gather_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer, search: SearchStructure,
                       prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                       suffixes: wp.array(dtype=PathReservoir), width: int, height: int, direct: wp.array(dtype=wp.vec3),

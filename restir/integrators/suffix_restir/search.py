@@ -20,6 +20,7 @@ from ...device.scene_device import SceneDevice
 from ...device.streams import SR_MAX_GATHER_SUFFIXES
 from ..common.events import ray_events
 from ..common.gbuffer import GBuffer
+from .params import KERNEL_MODULE
 from .prefix import PrefixReservoir, has_prefix
 
 NO_PIXEL = wp.constant(-1)
@@ -41,7 +42,7 @@ class SearchStructure:
     halves: wp.array(dtype=float)
 
 
-@wp.kernel
+@wp.kernel(module=KERNEL_MODULE)
 def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, far: wp.vec3,
                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, centers: wp.array(dtype=wp.vec3),
                  halves: wp.array(dtype=float), lowers: wp.array(dtype=wp.vec3), uppers: wp.array(dtype=wp.vec3),

@@ -1,0 +1,266 @@
+"""Suffix ReSTIR: the report's evaluation, reproduced and extended (issue 10), each phase in one run.
+
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase stages   # 800x800 shared Cornell box: per-stage ms, memory
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase scaling  # final-gather time against N, M, radius
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase grid     # the quality grid as one image, relMSE per tile
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase quality  # equal-time relMSE vs pt and restir-pt
+
+stages: Suffix ReSTIR with its defaults for `--frames` frames after a warm-up frame, alternating
+with the path tracer at 1 spp (A B A B), both twice; per-stage ms per frame grouped as the
+report's six stages, the frame ratio, bytes per pixel by buffer. The search structure's cost is its
+stage (boxes and build) plus its queries inside the gather, timed alone (one query per pixel per
+gathered prefix, launched as the gather is).
+
+scaling: the gather's ms per frame at `--size` for N in {1, 2, 4, 8} (M = 1), M in {1, 2, 4, 8}
+(N = 4) and the search radius multiplier in {0.5, 1, 2, 4} (N = 4, M = 1), with the fraction of
+gather slots the search filled.
+
+grid: at `--size` on the Cornell box, 16 warm-up frames then one frame per tile: the path tracer
+at 1, 8, 32, 128 spp; one prefix with 2, 8, 32, 128 suffixes; 1, 8, 32, 128 prefixes with one
+suffix. Suffix ReSTIR gathers at most 8 suffixes and 16 prefixes per sample (the official
+prototype's M <= 8), so a tile asking for more renders several samples per pixel (spp = count /
+limit) and says so. relMSE against the path tracer at `--ref-spp` under each tile; written as one
+EXR and PNG.
+
+quality: 16 warm-up frames then 16 measured, relMSE per frame (frames 16..31) and accumulated,
+against the path tracer at `--ref-spp`; the path tracer and ReSTIR PT get Suffix ReSTIR's measured
+frame time (the path tracer by spp fitted as a + b spp; ReSTIR PT by spp as well).
+"""
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+import restir
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+REPORT_STAGES = {  # the report's six stages -> our stage names
+    "1 prefix generation + temporal reuse": ("prefix", "prefix_temporal"),
+    "2 prefix spatial reuse": (),
+    "3 suffix generation + temporal reuse": ("suffix", "suffix_temporal"),
+    "4 suffix spatial reuse": ("suffix_spatial",),
+    "5 prefix search structure": ("search",),
+    "6 final gather": ("gather",),
+}
+REPORT_MS = {"1 prefix generation + temporal reuse": 45.0, "3 suffix generation + temporal reuse": 72.0,
+             "5 prefix search structure": 7.5, "6 final gather": 50.0}  # RTX 3070, 800x800 (the seed report)
+
+
+def shared(name):
+    from tests.shared_scenes import scene_path
+
+    return str(scene_path(name))
+
+
+def relmse(x, ref):
+    return float(np.mean((x - ref) ** 2 / (ref ** 2 + 0.01)))
+
+
+def render(scene, method, frames, seed=1, spp=1, settings=None, **kw):
+    return restir.render(scene, restir.RenderConfig(method=method, spp=spp, frames=frames, seed=seed,
+                                                    settings=settings or {}, **kw))
+
+
+def query_ms(scene, size, max_depth, settings=None):
+    """ms of the gather's search queries alone: per gathered prefix, one query per pixel at a fresh
+    prefix end, launched over the pipeline's slices; the frame's structure, from a short render."""
+    import warp as wp
+
+    from restir.api import make_integrator
+    from restir.device.rng import hash_combine, rng_key
+    from restir.device.scene_device import SceneDevice
+    from restir.integrators.common.gbuffer import GBuffer
+    from restir.integrators.common.shading import load_shading
+    from restir.integrators.suffix_restir.params import SRParams
+    from restir.integrators.suffix_restir.prefix import trace_prefix
+    from restir.integrators.suffix_restir.search import SearchStructure, nearest_prefix_ends
+    from restir.parallel import launch_pixels
+
+    @wp.kernel
+    def ends_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer, points: wp.array(dtype=wp.vec3)):
+        pixel = wp.tid() + offset
+        points[pixel] = wp.vec3(1.0e30)
+        sc = load_shading(scene, gb, pixel)
+        if sc.valid != 0:
+            pf = trace_prefix(scene, params, sc, hash_combine(rng_key(wp.uint32(3), wp.uint32(5), wp.uint32(7),
+                                                                      wp.uint32(pixel)), wp.uint32(0)))
+            if pf.valid != 0:
+                points[pixel] = pf.hit.p
+
+    @wp.kernel
+    def queries_kernel(offset: int, search: SearchStructure, count: int, points: wp.array(dtype=wp.vec3),
+                       found: wp.array(dtype=int)):
+        pixel = wp.tid() + offset
+        x = points[pixel]
+        if x[0] < 1.0e29:
+            found[pixel] = nearest_prefix_ends(search, x, count).found
+
+    sc = restir.load_scene(scene)
+    sc.camera.width = sc.camera.height = size
+    integ = make_integrator(sc, restir.RenderConfig(method="suffix-restir", spp=1, max_depth=max_depth,
+                                                    settings=settings or {}))
+    integ.render_frame(0)
+    integ.render_frame(1)
+    n = integ.num_pixels
+    points = wp.zeros(n, dtype=wp.vec3, device=integ.device)
+    found = wp.zeros(n, dtype=int, device=integ.device)
+    launch_pixels(ends_kernel, n, [integ.dscene.scene, integ.params(1, 0), integ.gbuffers.previous], [points],
+                  integ.device, integ.slices)
+    args = [integ.search, int(integ.settings["gather.suffixes"])]
+    launch_pixels(queries_kernel, n, args, [points, found], integ.device, integ.slices)
+    wp.synchronize()
+    t = time.perf_counter()
+    for _ in range(3):
+        launch_pixels(queries_kernel, n, args, [points, found], integ.device, integ.slices)
+    wp.synchronize()
+    return (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
+
+
+def phase_stages(args, out):
+    scene = restir.load_scene(shared("cornell-box"))
+    common = dict(max_depth=args.max_depth, width=args.stage_size, height=args.stage_size)
+    render(scene, "suffix-restir", 1, **common)  # compile, warm up
+    render(scene, "pt", 1, **common)
+    ms = []
+    for rep in range(2):
+        a = render(scene, "suffix-restir", args.frames, seed=rep, **common)
+        b = render(scene, "pt", args.frames, seed=rep, **common)
+        ms.append((a.stats["ms_per_frame"], b.stats["ms_per_frame"]))
+    stages = {k: v["total_ms"] / args.frames for k, v in a.stats["stages"].items()}
+    grouped = {k: sum(stages.get(s, 0.0) for s in v) for k, v in REPORT_STAGES.items()}
+    q = query_ms(shared("cornell-box"), args.stage_size, args.max_depth)
+    bpp = a.stats["bytes_per_pixel"]
+    print(f"\ncornell-box {args.stage_size}x{args.stage_size} max_depth {args.max_depth}: Suffix ReSTIR ms per frame")
+    print("  " + "  ".join(f"{k} {v:.0f}" for k, v in stages.items()))
+    for k, v in grouped.items():
+        print(f"  report stage {k}: {v:.0f} ms" + (f" (report: {REPORT_MS[k]} ms on an RTX 3070)" if k in REPORT_MS else ""))
+    print(f"  search structure: build {stages.get('search', 0):.1f} ms + queries {q:.1f} ms = "
+          f"{100 * (stages.get('search', 0) + q) / ms[-1][0]:.1f}% of the frame")
+    print(f"  frame {ms[-1][0]:.0f} ms, path tracer 1 spp {ms[-1][1]:.0f} ms; ratio "
+          + ", ".join(f"{x / y:.2f}" for x, y in ms))
+    print(f"  bytes per pixel: {bpp['total']:.0f}; " + ", ".join(f"{k} {v:.0f}" for k, v in bpp.items() if k != "total"))
+    print(f"  shifts {json.dumps(a.stats['shifts'])}; gather slots {a.stats['gather_slots']}")
+    out["stages"] = {"stages_ms": stages, "report_stages_ms": grouped, "search_query_ms": q, "frame_ms": ms,
+                     "bytes_per_pixel": bpp, "shifts": a.stats["shifts"], "gather_slots": a.stats["gather_slots"]}
+
+
+def phase_scaling(args, out):
+    scene = restir.load_scene(shared("cornell-box"))
+    common = dict(max_depth=args.max_depth, width=args.size, height=args.size)
+    render(scene, "suffix-restir", 1, **common)
+    rows = {}
+    grid = [("N", {"gather.prefixes": n}) for n in (1, 2, 4, 8)] + \
+           [("M", {"gather.suffixes": m}) for m in (1, 2, 4, 8)] + \
+           [("radius", {"gather.radius": r}) for r in (0.5, 1.0, 2.0, 4.0)]
+    for name, st in grid:
+        a = render(scene, "suffix-restir", args.frames, settings=st, **common)
+        g = a.stats["stages"]["gather"]["total_ms"] / args.frames
+        key = f"{name} {list(st.values())[0]}"
+        rows[key] = {"gather_ms": g, "frame_ms": a.stats["ms_per_frame"], "slots": a.stats["gather_slots"]}
+        print(f"  {key}: gather {g:.0f} ms, frame {a.stats['ms_per_frame']:.0f} ms, slots {a.stats['gather_slots']}")
+    out["scaling"] = rows
+
+
+def labelled_png(path, image, tile, labels):
+    """The grid as an sRGB PNG with each tile's label under it (Pillow's default font)."""
+    from PIL import Image, ImageDraw
+
+    from restir.image_io import linear_to_srgb
+
+    rgb = (np.clip(linear_to_srgb(np.clip(image, 0, None)), 0, 1) * 255 + 0.5).astype(np.uint8)
+    rows, cols = image.shape[0] // tile, image.shape[1] // tile
+    band = 28
+    canvas = Image.new("RGB", (image.shape[1], rows * (tile + band)), "white")
+    draw = ImageDraw.Draw(canvas)
+    for r in range(rows):
+        canvas.paste(Image.fromarray(rgb[r * tile:(r + 1) * tile]), (0, r * (tile + band)))
+        for c in range(cols):
+            draw.text((c * tile + 2, r * (tile + band) + tile + 1), labels[r * cols + c], fill="black")
+    canvas.save(path)
+
+
+def phase_grid(args, out):
+    from restir.image_io import write_image
+
+    scene = restir.load_scene(shared("cornell-box"))
+    common = dict(max_depth=args.max_depth, width=args.size, height=args.size, keep_frames=True)
+    ref = render(scene, "pt", 1, seed=99, spp=args.ref_spp, **common).image.astype(np.float64)
+    tiles, labels = [], []
+    for n in (1, 8, 32, 128):
+        img = render(scene, "pt", 1, spp=n, **common).image
+        tiles.append(img)
+        labels.append(f"path tracer {n} spp")
+    for kind, counts in (("suffixes", (2, 8, 32, 128)), ("prefixes", (1, 8, 32, 128))):
+        limit = 8 if kind == "suffixes" else 16
+        for c in counts:
+            spp = max(1, c // limit)
+            st = {"gather.prefixes": 1, "gather.suffixes": min(c, limit)} if kind == "suffixes" else \
+                {"gather.prefixes": min(c, limit), "gather.suffixes": 1}
+            r = render(scene, "suffix-restir", 17, spp=spp, settings=st, **common)
+            tiles.append(r.frame_images[-1])
+            what = f"1 prefix x {c} suffixes" if kind == "suffixes" else f"{c} prefixes x 1 suffix"
+            labels.append(what + (f" ({spp} spp of {min(c, limit)})" if spp > 1 else ""))
+    errs = [relmse(t.astype(np.float64), ref) for t in tiles]
+    rows = [np.concatenate(tiles[i:i + 4], axis=1) for i in range(0, 12, 4)]
+    image = np.concatenate(rows, axis=0).astype(np.float32)
+    os.makedirs(args.out_dir, exist_ok=True)
+    write_image(os.path.join(args.out_dir, "suffix_grid.exr"), image)
+    labelled_png(os.path.join(args.out_dir, "suffix_grid.png"), image, args.size,
+                 [f"{l}\nrelMSE {e:.4f}" for l, e in zip(labels, errs)])
+    for l, e in zip(labels, errs):
+        print(f"  {l}: relMSE {e:.4f}")
+    out["grid"] = dict(zip(labels, errs))
+
+
+def phase_quality(args, out):
+    from benchmarks.bench_restir_pt import EqualTime, MEAS, WARM
+
+    scenes = {"indirect-room": "builtin:indirect-room", "veach-bidir": shared("veach-bidir")}
+    for name, spec in scenes.items():
+        et = EqualTime(args, spec)
+        a = render(et.scene, "suffix-restir", WARM + MEAS, **et.common)
+        target = a.stats["ms_per_frame"]
+        spp = max(1, int(round((target - et.fixed) / et.slope)))
+        b = render(et.scene, "pt", WARM + MEAS, spp=spp, **et.common)
+        # ReSTIR PT's frame time at 1 spp, and spp fitted to Suffix ReSTIR's time
+        c1 = render(et.scene, "restir-pt", 4, **et.common).stats["ms_per_frame"]
+        pt_spp = max(1, int(round(target / c1)))
+        c = render(et.scene, "restir-pt", WARM + MEAS, spp=pt_spp, **et.common)
+        res = {}
+        for label, r in (("suffix-restir", a), ("pt", b), ("restir-pt", c)):
+            f = r.frame_images[WARM:].astype(np.float64)
+            res[label] = {"ms": r.stats["ms_per_frame"], "relmse_frame": float(np.mean([relmse(x, et.ref) for x in f])),
+                          "relmse_accumulated": relmse(f.mean(0), et.ref)}
+        print(f"\n{name} {args.size}x{args.size}: Suffix ReSTIR {target:.0f} ms; path tracer {spp} spp "
+              f"({b.stats['ms_per_frame']:.0f} ms); ReSTIR PT {pt_spp} spp ({c.stats['ms_per_frame']:.0f} ms)")
+        for label, v in res.items():
+            print(f"  {label}: relMSE per frame {v['relmse_frame']:.4f}, accumulated {v['relmse_accumulated']:.4f}")
+        out[f"quality {name}"] = res
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "all"], default="all")
+    ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--stage-size", type=int, default=800)
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--ref-spp", type=int, default=2048)
+    ap.add_argument("--out-dir", default="out/bench_suffix")
+    ap.add_argument("--json")
+    args = ap.parse_args()
+    out = {}
+    for phase in ("stages", "scaling", "grid", "quality"):
+        if args.phase in (phase, "all"):
+            globals()[f"phase_{phase}"](args, out)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(out, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
