@@ -50,19 +50,7 @@ REPORT_MS = {"1 prefix generation + temporal reuse": 45.0, "3 suffix generation 
              "5 prefix search structure": 7.5, "6 final gather": 50.0}  # RTX 3070, 800x800 (the seed report)
 
 
-def shared(name):
-    from tests.shared_scenes import scene_path
-
-    return str(scene_path(name))
-
-
-def relmse(x, ref):
-    return float(np.mean((x - ref) ** 2 / (ref ** 2 + 0.01)))
-
-
-def render(scene, method, frames, seed=1, spp=1, settings=None, **kw):
-    return restir.render(scene, restir.RenderConfig(method=method, spp=spp, frames=frames, seed=seed,
-                                                    settings=settings or {}, **kw))
+from benchmarks.bench_restir_pt import relmse, render, shared  # noqa: E402  (after the path insert)
 
 
 def query_ms(scene, size, max_depth, settings=None):

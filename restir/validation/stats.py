@@ -196,22 +196,24 @@ class ZTestReport:
         self.mdb = mdb(self.image_crit, self.image_se, self.image_ref)
 
     @staticmethod
+    def _batch_tiles(batches, tile):
+        """(B, H, W) batches -> (B, H / tile, W / tile) tile means, in float64."""
+        b = np.asarray(batches, np.float64)
+        h, w = b.shape[1] - b.shape[1] % tile, b.shape[2] - b.shape[2] % tile
+        return b[:, :h, :w].reshape(b.shape[0], h // tile, tile, w // tile, tile).mean(axis=(2, 4))
+
+    @staticmethod
     def _tile_skewness(batches, tile):
         """Skewness over the B batches of each tile's mean."""
-        b = np.asarray(batches, np.float64)
-        n = b.shape[0]
-        h, w = b.shape[1] - b.shape[1] % tile, b.shape[2] - b.shape[2] % tile
-        tiles = b[:, :h, :w].reshape(n, h // tile, tile, w // tile, tile).mean(axis=(2, 4))
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.nan_to_num(sps.skew(tiles, axis=0))
+            return np.nan_to_num(sps.skew(ZTestReport._batch_tiles(batches, tile), axis=0))
 
     @staticmethod
     def _aggregate_variances(batches, tile):
         """Variance of the mean over B batches of the image mean and of each tile mean."""
         b = np.asarray(batches, np.float64)
         n = b.shape[0]
-        h, w = b.shape[1] - b.shape[1] % tile, b.shape[2] - b.shape[2] % tile
-        tiles = b[:, :h, :w].reshape(n, h // tile, tile, w // tile, tile).mean(axis=(2, 4))
+        tiles = ZTestReport._batch_tiles(b, tile)
         return float(b.mean(axis=(1, 2)).var(ddof=1) / n), tiles.var(axis=0, ddof=1) / n
 
     def _z(self, dev, ref, se):

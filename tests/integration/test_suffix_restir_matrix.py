@@ -11,12 +11,7 @@ tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 
-from restir.scene.builtin import sphere_cap_radiance
-from restir.validation import IndependentRuns
-from tests.integration.test_path_tracer import ANALYTIC_REL_TOL, check
-from tests.integration.test_restir_pt_matrix import CAMERA_SPEED, SCENES, SIZE, reference
-
-import restir
+from tests.integration.test_restir_pt_matrix import SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 MATRIX = {
@@ -40,16 +35,5 @@ MATRIX = {
 @pytest.mark.parametrize("name", list(SCENES))
 def test_suffix_restir_matrix(name, config):
     settings, motion = MATRIX[config]
-    load, depth, bound, runs, frames = SCENES[name]
-    cfg = restir.RenderConfig(method="suffix-restir", spp=1, frames=frames, width=SIZE, height=SIZE, max_depth=depth,
-                              settings=settings, camera_motion=motion, camera_speed=CAMERA_SPEED[motion])
-    r = IndependentRuns(load(), cfg, runs, 100)
-    assert all(s["settings"]["debug.mutation"] == "none" for s in r.stats)
-    assert not any(s["reuse_dead"] for s in r.stats), r.stats[0]["shifts"]
-    if name == "sphere-cap":
-        rep = check(r, sphere_cap_radiance(0.5, 1.0, 0.05, depth), rel_tol=ANALYTIC_REL_TOL)
-    else:
-        ref = reference(name, motion)
-        rep = check(r, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
-    print(name, config, f"K={runs} T={frames} MDB={rep.mdb:.4f}", r.stats[0]["shifts"], r.stats[0]["gather_slots"])
-    assert rep.mdb < bound
+    print(config, end=" ")
+    run_cell(name, "suffix-restir", settings, motion)

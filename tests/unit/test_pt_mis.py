@@ -26,7 +26,7 @@ from restir.integrators.common.shading import load_shading, similar_surfaces
 from restir.integrators.restir_pt.params import PTRParams
 from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path
 from restir.integrators.restir_pt.reuse_pair import make_reuse_pair
-from restir.integrators.restir_pt.s2_temporal import CURRENT, HISTORY
+from restir.integrators.restir_pt.reuse_pair import CURRENT, HISTORY
 from restir.integrators.restir_pt.shift import make_shift, shift_path
 from restir.resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization, talbot_weight2
 from restir.resampling.ris import cap_history
@@ -55,7 +55,7 @@ N_OUT = 5  # [tested, spatial sum, neighbours producing y, temporal sum, history
 
 
 def make_mis_kernel(shift):
-    shift_in, shift_out = make_reuse_pair(shift, None if shift is shift_path else "unique")
+    shift_in, shift_out, _, _ = make_reuse_pair(shift, None if shift is shift_path else "unique")
 
     @wp.kernel(module="unique")
     def mis_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),

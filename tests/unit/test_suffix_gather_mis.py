@@ -42,7 +42,7 @@ def as_sample(r: PathReservoir) -> PathReservoir:
 
 
 def make_kernel(gather):
-    _, shift_out = make_reuse_pair(shift_path)
+    _, shift_out, _, _ = make_reuse_pair(shift_path)
 
     @wp.kernel(module="unique")
     def gather_mis_kernel(scene: SceneDevice, params: SRParams, gb: GBuffer, search: SearchStructure,

@@ -12,15 +12,28 @@ spatial passes (and the stage-level D1 test) compute them.
 A failed shift (or an input without a path) leaves its densities 0: the technique stays in the
 set with density 0 (TESTING.md 5.0 (v)). M_i is the confidence the pass uses for i (the history's
 is capped before any weight: cap_history).
+
+On top of them, the resampling both kinds of pass do (`Reuse`: the RIS state, the pairwise MIS
+accumulator, the chosen sample, the shift bookkeeping): `temporal_pair` (the canonical and the
+history, generalized balance over the two), and `spatial_neighbor` / `spatial_canonical`
+(pairwise MIS, neighbours first, then the canonical input with its accumulated weight). Each
+domain comes with its own parameters: ReSTIR PT's pixels share one, Suffix ReSTIR's suffix
+domains each hold their own length budget.
 """
 import warp as wp
 
 from ...device.color import luminance
 from ...device.scene_device import SceneDevice
+from ...resampling.mis import PairwiseMIS, pairwise_add_neighbor, pairwise_init, talbot_weight2
+from ...resampling.ris import RisState, ris_init, ris_merge
 from ..common.shading import Shading
 from .params import PTRParams
-from .path_sample import PathReservoir, holds_path
+from .path_sample import ORIGIN_SPATIAL, ORIGIN_TEMPORAL, PathReservoir, holds_path, with_origin
 from .shift import ShiftResult, shift_counts, shift_path
+
+CURRENT = wp.constant(0)      # the temporal pass's input indices in its selection
+HISTORY = wp.constant(1)
+CANONICAL = wp.constant(1000)  # the spatial pass's canonical input (neighbours are 0..k-1)
 
 
 @wp.struct
@@ -61,11 +74,30 @@ def tally(t: ShiftTally, r: PathReservoir, res: ShiftResult, tried: int, into_pi
     return out
 
 
+@wp.struct
+class Reuse:
+    """A reuse pass's state for one pixel: the resampling, its pairwise MIS accumulator (spatial),
+    the chosen input's path (already in this pixel's domain) and the shift bookkeeping."""
+    s: RisState
+    mis: PairwiseMIS
+    chosen: PathReservoir
+    tl: ShiftTally
+
+
+@wp.func
+def spatial_start(c: PathReservoir, k: int) -> Reuse:
+    st = Reuse()
+    st.s = ris_init()
+    st.mis = pairwise_init(k)
+    st.chosen = c
+    return st
+
+
 _pairs: dict = {}
 
 
 def make_reuse_pair(shift=shift_path, module=None):
-    """(shift_in, shift_out) over a shift function (the shipped one, or a
+    """(shift_in, shift_out, temporal_pair, spatial_neighbor) over a shift function (the shipped one, or a
     mutant's for the mutation tests), built once per shift."""
     if shift in _pairs:
         return _pairs[shift]
@@ -93,8 +125,52 @@ def make_reuse_pair(shift=shift_path, module=None):
                 out.d_i = luminance(out.t.r.F) * out.t.J * M_i
         return out
 
-    _pairs[shift] = (shift_in, shift_out)
+    @wp.func(module=module)
+    def temporal_pair(scene: SceneDevice, c: PathReservoir, c_params: PTRParams, sc: Shading, r: PathReservoir,
+                      Mq: float, q_params: PTRParams, sq: Shading, u_current: float, u_history: float) -> Reuse:
+        """The canonical input c (domain sc) with the history r (domain sq, confidence Mq, already
+        capped): each shifted into the other's domain, generalized balance MIS over the two."""
+        st = Reuse()
+        hist = shift_in(scene, c_params, r, Mq, c.M, sc)
+        cur = shift_out(scene, q_params, c, Mq, sq)
+        st.tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
+        st.s = ris_init()
+        p_c = luminance(c.F)
+        st.s = ris_merge(st.s, talbot_weight2(p_c * c.M, cur.d_i, CURRENT), p_c, 1.0, c.W, c.M, CURRENT, u_current)
+        st.s = ris_merge(st.s, talbot_weight2(hist.d_c, hist.d_i, HISTORY), hist.p_c, hist.t.J, r.W, Mq, HISTORY,
+                         u_history)
+        st.chosen = c
+        if st.s.selected == HISTORY:
+            st.chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
+        return st
+
+    @wp.func(module=module)
+    def spatial_neighbor(st: Reuse, scene: SceneDevice, c: PathReservoir, c_params: PTRParams, sc: Shading,
+                         r: PathReservoir, n_params: PTRParams, sn: Shading, j: int, u: float) -> Reuse:
+        """Neighbour j (sample r, domain sn, valid by geometry) into the pairwise resampling of c."""
+        out = st
+        nbr = shift_in(scene, c_params, r, r.M, c.M, sc)
+        own = shift_out(scene, n_params, c, r.M, sn)
+        out.tl = tally(tally(st.tl, r, nbr.t, nbr.tried, 1), c, own.t, own.tried, 0)
+        out.mis = pairwise_add_neighbor(st.mis, nbr.d_i, nbr.d_c, luminance(c.F) * c.M, own.d_i)
+        out.s = ris_merge(st.s, out.mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j, u)
+        if out.s.selected == j:
+            out.chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
+        return out
+
+    _pairs[shift] = (shift_in, shift_out, temporal_pair, spatial_neighbor)
     return _pairs[shift]
 
 
-shift_in, shift_out = make_reuse_pair()
+@wp.func
+def spatial_canonical(st: Reuse, c: PathReservoir, u: float) -> Reuse:
+    """The canonical input last, with its accumulated pairwise weight."""
+    out = st
+    p_c = luminance(c.F)
+    out.s = ris_merge(st.s, st.mis.m_c, p_c, 1.0, c.W, c.M, CANONICAL, u)
+    if out.s.selected == CANONICAL:
+        out.chosen = c
+    return out
+
+
+shift_in, shift_out, temporal_pair, spatial_neighbor = make_reuse_pair()

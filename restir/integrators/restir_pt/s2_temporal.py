@@ -13,29 +13,24 @@ Writes: reservoirs_out, events.
 import warp as wp
 
 from ...device.camera import Camera
-from ...device.color import luminance
 from ...device.rng import rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import PT_TEMPORAL_DIMS_PER_SAMPLE, STAGE_PT_TEMPORAL
-from ...resampling.mis import talbot_weight2
-from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
+from ...resampling.ris import cap_history, ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
 from .params import KERNEL_MODULE, PTRParams
-from .path_sample import ORIGIN_TEMPORAL, PathReservoir, store, with_origin
-from .reuse_pair import ShiftTally, make_reuse_pair, tally
+from .path_sample import PathReservoir, store
+from .reuse_pair import make_reuse_pair
 from .shift import shift_path
-
-CURRENT = wp.constant(0)
-HISTORY = wp.constant(1)
 
 
 def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
     """The temporal kernel over a shift function; drop_failed builds the mutation that drops a
     history whose shift failed (its M and its density in the current sample's weight)."""
-    shift_in, shift_out = make_reuse_pair(shift, module)
+    shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
     def temporal_kernel(offset: int, scene: SceneDevice, params: PTRParams, prev_camera: Camera, gb: GBuffer,
@@ -59,25 +54,15 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         Mq = cap_history(r.M, params.temporal_cap, c.M)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        # ---- the history's sample shifted here, and the current sample there (its density there)
-        hist = shift_in(scene, params, r, Mq, c.M, sc)
-        cur = shift_out(scene, params, c, Mq, sq)
-        tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
-        shifts[pixel] = tl.counts
         if wp.static(drop_failed):
-            if hist.t.valid == 0:
+            if shift_in(scene, params, r, Mq, c.M, sc).t.valid == 0:
                 return
-        s = ris_init()
-        p_c = luminance(c.F)
-        s = ris_merge(s, talbot_weight2(p_c * c.M, cur.d_i, CURRENT), p_c, 1.0, c.W, c.M, CURRENT,
-                      rng_uniform(key, base))
-        s = ris_merge(s, talbot_weight2(hist.d_c, hist.d_i, HISTORY), hist.p_c, hist.t.J, r.W, Mq, HISTORY,
-                      rng_uniform(key, base + wp.uint32(1)))
-        chosen = c
-        if s.selected == HISTORY:
-            chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
-        reservoirs_out[pixel] = store(chosen, ris_finalize(s, 1.0))
-        events[pixel] = stage_events(s, tl.failed, tl.rays)
+        # ---- the history's sample shifted here, and the current sample there (its density there)
+        st = temporal_pair(scene, c, params, sc, r, Mq, params, sq, rng_uniform(key, base),
+                           rng_uniform(key, base + wp.uint32(1)))
+        shifts[pixel] = st.tl.counts
+        reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
+        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
 
     return temporal_kernel
 

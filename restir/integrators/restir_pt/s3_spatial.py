@@ -9,29 +9,26 @@ Writes: reservoirs_out (a different buffer: ping-pong), events.
 """
 import warp as wp
 
-from ...device.color import luminance
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
 from ...device.scene_device import SceneDevice
 from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, DI_SPATIAL_DIM_SELECT,
                                DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_PT_SPATIAL)
-from ...resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization
-from ...resampling.ris import ris_finalize, ris_init, ris_merge
+from ...resampling.mis import pairwise_normalization
+from ...resampling.ris import ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_technique
 from ..common.shading import load_shading
 from .params import KERNEL_MODULE, PTRParams
-from .path_sample import ORIGIN_SPATIAL, PathReservoir, store, with_origin
-from .reuse_pair import ShiftTally, make_reuse_pair, tally
+from .path_sample import PathReservoir, store
+from .reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
 from .shift import shift_path
-
-CANONICAL = wp.constant(1000)  # the canonical input's index in the selection (neighbours are 0..k-1)
 
 
 def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None):
     """The spatial kernel over a shift function; drop_failed builds the mutation that leaves
     neighbours whose shift failed out of the technique set (V, M and the canonical weight)."""
-    shift_in, shift_out = make_reuse_pair(shift, module)
+    shift_in, _, _, spatial_neighbor = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
     def spatial_kernel(offset: int, scene: SceneDevice, params: PTRParams, width: int, height: int, gb: GBuffer,
@@ -45,43 +42,26 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
         if sc.valid == 0:
             reservoirs_out[pixel] = c
             return
-        p_c = luminance(c.F)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_SPATIAL + params.spatial_round), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE)
-        s = ris_init()
-        mis = pairwise_init(params.spatial_k)
-        chosen = c
-        tl = ShiftTally()
+        st = spatial_start(c, params.spatial_k)
         for j in range(params.spatial_k):
             dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
             nb = spatial_technique(scene, gb, rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width,
                                    height, params.spatial_radius, sc)
             if nb.pixel == NO_PIXEL:
                 continue
-            n = nb.pixel
-            sn = nb.sh
-            r = reservoirs_in[n]
-            # ---- the neighbour's sample here, and this pixel's sample there
-            nbr = shift_in(scene, params, r, r.M, c.M, sc)
-            tl = tally(tl, r, nbr.t, nbr.tried, 1)
+            r = reservoirs_in[nb.pixel]
             if wp.static(drop_failed):
-                if nbr.t.valid == 0:
+                if shift_in(scene, params, r, r.M, c.M, sc).t.valid == 0:
                     continue
-            own = shift_out(scene, params, c, r.M, sn)
-            tl = tally(tl, c, own.t, own.tried, 0)
-            mis = pairwise_add_neighbor(mis, nbr.d_i, nbr.d_c, p_c * c.M, own.d_i)
-            s = ris_merge(s, mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j,
-                          rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
-            if s.selected == j:
-                chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
-        # ---- the canonical input last, with its accumulated pairwise weight
-        s = ris_merge(s, mis.m_c, p_c, 1.0, c.W, c.M, CANONICAL,
-                      rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
-        if s.selected == CANONICAL:
-            chosen = c
-        reservoirs_out[pixel] = store(chosen, ris_finalize(s, pairwise_normalization(mis)))
-        events[pixel] = stage_events(s, tl.failed, tl.rays)
-        shifts[pixel] = tl.counts
+            # ---- the neighbour's sample here, and this pixel's sample there
+            st = spatial_neighbor(st, scene, c, params, sc, r, params, nb.sh, j,
+                                  rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
+        st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
+        reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))
+        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
+        shifts[pixel] = st.tl.counts
 
     return spatial_kernel
 

@@ -9,17 +9,12 @@ import math
 import numpy as np
 import warp as wp
 
-from ...device.streams import MAX_SPATIAL_ROUNDS, PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS, SR_MAX_GATHER_SUFFIXES
-from ...device.streams import SR_MAX_GATHER_PREFIXES
-from ...film import PixelMoments
-from ..base import Integrator
+from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
-from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC, attach_direct_light, check_di_settings
-from ..restir_pt.params import SHIFTS, PTRParams
-from ..restir_pt.path_sample import PathReservoir
-from ..restir_pt.pipeline import PT_MAX_DEPTH, summarize_shifts
+from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC
+from ..restir_pt.path_reuse import PathReuseIntegrator
 from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
 from .s1_prefix import prefix_kernel, prefix_temporal_kernel
@@ -48,7 +43,7 @@ def stage_kernels(mutation: str) -> tuple:
     return _mutant_kernels[mutation]
 
 
-class SuffixReSTIR(Integrator):
+class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix",
               "prefix_temporal", "search", "suffix", "suffix_temporal", "suffix_spatial", "gather")
@@ -99,23 +94,16 @@ class SuffixReSTIR(Integrator):
     SPATIAL_RADIUS_1080 = 30.0
     MUTATIONS = MUTATIONS
 
+    SPATIAL_KEYS = ("suffix.spatial.rounds", "suffix.spatial.neighbors", "suffix.spatial.radius")
+    RESERVOIRS = "suffixes"
+
     @staticmethod
     def check_settings(settings: dict) -> None:
         from ...config import ConfigError
 
         s = settings
-        if s["shift"] not in SHIFTS:
-            raise ConfigError(f"shift must be one of {', '.join(SHIFTS)}")
-        if s["direct"] not in ("restir-di", "pt"):
-            raise ConfigError("direct must be restir-di or pt")
-        if not 1 <= s["candidates"] <= PT_MAX_CANDIDATES:
-            raise ConfigError(f"candidates must be in [1, {PT_MAX_CANDIDATES}]")
-        if not 0 <= s["suffix.spatial.rounds"] <= MAX_SPATIAL_ROUNDS or \
-                not 1 <= s["suffix.spatial.neighbors"] <= PT_MAX_NEIGHBORS:
-            raise ConfigError(f"suffix.spatial.rounds must be in [0, {MAX_SPATIAL_ROUNDS}] and "
-                              f"suffix.spatial.neighbors in [1, {PT_MAX_NEIGHBORS}]")
-        for k in ("suffix.spatial.radius", "gather.fallback_radius"):
-            resolve_spatial_radius(s[k], SuffixReSTIR.SPATIAL_RADIUS_1080, 1)
+        SuffixReSTIR.check_path_settings(s)
+        resolve_spatial_radius(s["gather.fallback_radius"], SuffixReSTIR.SPATIAL_RADIUS_1080, 1)
         if not 1 <= s["gather.prefixes"] <= SR_MAX_GATHER_PREFIXES:
             raise ConfigError(f"gather.prefixes must be in [1, {SR_MAX_GATHER_PREFIXES}]")
         if not 1 <= s["gather.suffixes"] <= SR_MAX_GATHER_SUFFIXES:
@@ -126,35 +114,20 @@ class SuffixReSTIR(Integrator):
             raise ConfigError(f"gather.search must be one of {', '.join(SEARCHES)}")
         if not s["prefix.min_length"] >= 1:
             raise ConfigError("prefix.min_length must be >= 1")
-        for k in ("rc.near_distance", "rc.roughness", "prefix.short_segment", "gather.radius"):
+        for k in ("prefix.short_segment", "gather.radius"):
             if not s[k] >= 0.0:
                 raise ConfigError(f"{k} must be >= 0")
-        if s["debug.mutation"] not in MUTATIONS:
-            raise ConfigError(f"debug.mutation must be one of {', '.join(MUTATIONS)}")
-        if s["max_depth"] > PT_MAX_DEPTH:
-            raise ConfigError(f"suffix-restir renders max_depth up to {PT_MAX_DEPTH} (or -1)")
-        check_di_settings(s)
 
     def kernels(self) -> tuple:
         return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
 
     def allocate(self) -> None:
         s = self.settings
-        if s["max_depth"] < 0:
-            s["max_depth"] = PT_MAX_DEPTH
-            self.notes.append(f"suffix-restir renders unbounded depth as max_depth {PT_MAX_DEPTH}")
-        self.spatial_radius = resolve_spatial_radius(s["suffix.spatial.radius"], self.SPATIAL_RADIUS_1080, self.height)
+        self.allocate_path_reuse()
         self.fallback_radius = resolve_spatial_radius(s["gather.fallback_radius"], self.SPATIAL_RADIUS_1080,
                                                       self.height)
-        for k, v in (("suffix.spatial.radius", self.spatial_radius), ("gather.fallback_radius", self.fallback_radius)):
-            if s[k] == "auto":
-                s[k] = v
-        # primary-hit layer, and ReSTIR DI on it
-        self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
-        self.primary_weight = self.buffer("primary_weight", float)
-        self.emission = self.buffer("emission", wp.vec3)
-        self.di = attach_direct_light(self)
-        self.first_event = 1 if s["direct"] == "restir-di" else 0
+        if s["gather.fallback_radius"] == "auto":
+            s["gather.fallback_radius"] = self.fallback_radius
         # prefixes: this frame's fresh ones, the resampled ones (this frame's and the previous)
         self.fresh_prefixes = self.buffer("prefixes_fresh", PrefixReservoir)
         self.fresh_prefix_gb = allocate_gbuffer(self, "prefix_gbuffer_fresh")
@@ -172,39 +145,18 @@ class SuffixReSTIR(Integrator):
             self.lowers = wp.zeros(0, dtype=wp.vec3, device=self.device)
             self.uppers = wp.zeros(0, dtype=wp.vec3, device=self.device)
         self.structure = None
-        # suffixes
-        self.reservoirs = PingPong(self.buffer("suffixes", PathReservoir), self.buffer("suffixes_prev", PathReservoir))
-        self.pass_out = self.buffer("suffixes_pass", PathReservoir)
-        self.sample_L = self.buffer("sample_L", wp.vec3)
-        self.shift_events = self.buffer("shift_events", wp.vec4i)
         self.gather_slots = self.buffer("gather_slots", wp.vec4i)
-        self.shift_counts: dict = {}
         self.slot_counts = np.zeros(3, np.int64)  # gather slots filled by the search, by the fallback, empty
-        self.prev_camera = None
         host = self.dscene.host
         lo, hi = host.bounds()
         ext = hi - lo
         self.scene_radius = float(max(ext.min(), 1e-3 * ext.max()))  # CR's "sceneRadius": the smallest extent (6 item 20)
         self.far_point = wp.vec3(*(hi + 10.0 * (ext.max() + 1.0)))
         self.spread_angle = math.atan(2.0 * host.camera.tan_half()[1] / self.height)
-        self.resamples = s["max_depth"] >= self.first_event + 2
 
     def params(self, frame: int, sample: int) -> SRParams:
         s = self.settings
-        pt = PTRParams()
-        pt.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
-        pt.frame = wp.uint32(frame)
-        pt.sample = sample
-        pt.candidates = int(s["candidates"])
-        pt.max_depth = int(s["max_depth"])
-        pt.first_event = self.first_event
-        pt.shift = int(SHIFTS[s["shift"]])
-        pt.near_distance = float(s["rc.near_distance"]) * self.scene_radius
-        pt.rough_threshold = float(s["rc.roughness"])
-        pt.temporal_cap = float(s["suffix.temporal.cap"])
-        pt.spatial_round = 0
-        pt.spatial_k = int(s["suffix.spatial.neighbors"])
-        pt.spatial_radius = float(self.spatial_radius)
+        pt = self.pt_params(frame, sample, float(s["rc.near_distance"]) * self.scene_radius, s["suffix.temporal.cap"])
         p = SRParams()
         p.pt = pt
         p.min_prefix = int(s["prefix.min_length"])
@@ -218,12 +170,6 @@ class SuffixReSTIR(Integrator):
         p.box_scale = float(s["gather.radius"]) * self.spread_angle
         p.fallback_radius = float(self.fallback_radius)
         return p
-
-    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
-        """The base class's ping-pong pass over the suffix reservoirs, with its shift counts."""
-        super().reuse_pass(stage, kernel, inputs, (self.shift_events,), in_place)
-        acc = self.shift_counts.setdefault(stage, np.zeros(4, np.int64))
-        acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
 
     def build_search(self, p: SRParams) -> None:
         """Stage "search": the boxes, then the structure over them (rebuilt each frame), one timed
@@ -246,85 +192,52 @@ class SuffixReSTIR(Integrator):
                 self.search.radius = radius
             self.search.id = self.structure.id
 
-    def render_frame(self, frame: int):
+    def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
         sc = self.dscene.scene
-        camera = self.camera(frame)
         suffix, gather = stage_kernels(self.settings["debug.mutation"])
         gb, res = self.gbuffers, self.reservoirs
-        moments = PixelMoments((self.num_pixels, 3))
-        for s in range(self.settings["spp"]):
-            p = self.params(frame, s)
-            self.run_stage("gbuffer", primary_hits_kernel, [sc, camera, p.pt.seed, p.pt.frame, s,
-                                                            int(bool(self.settings["hide_emitters"]))],
-                           [gb.current, self.primary_weight, self.emission])
-            direct = self.emission
-            if self.di is not None:
-                self.di.resample_and_shade(frame, s)
-                direct = self.di.sample_L
-            history = self.prev_camera is not None
-            if self.resamples:
-                # ---- prefixes: fresh, then resampled with the previous frame's
-                if self.settings["prefix.temporal"] and history:
-                    self.run_stage("prefix", prefix_kernel, [sc, p, gb.current],
-                                   [self.fresh_prefixes, self.fresh_prefix_gb])
-                    self.run_stage("prefix_temporal", prefix_temporal_kernel,
-                                   [sc, p, self.prev_camera, gb.current, gb.previous, self.fresh_prefixes,
-                                    self.fresh_prefix_gb, self.prefixes.previous, self.prefix_gbs.previous],
-                                   [self.prefixes.current, self.prefix_gbs.current])
-                else:
-                    self.run_stage("prefix", prefix_kernel, [sc, p, gb.current],
-                                   [self.prefixes.current, self.prefix_gbs.current])
-                self.build_search(p)
-                # ---- suffixes at the resampled prefix ends, and their reuse
-                self.run_stage("suffix", suffix, [sc, p, self.prefixes.current, self.prefix_gbs.current],
-                               [res.current])
-                if self.settings["suffix.temporal"] and history:
-                    self.reuse_pass("suffix_temporal", suffix_temporal_kernel,
-                                    [sc, p, self.prev_camera, gb.current, gb.previous, self.prefixes.current,
-                                     self.prefix_gbs.current, self.prefixes.previous, self.prefix_gbs.previous,
-                                     res.previous])
-                for rd in range(self.settings["suffix.spatial.rounds"]):
-                    p.pt.spatial_round = rd
-                    self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
-                                    [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
-                                    self.settings["debug.mutation"] == "spatial_in_place")
-                # ---- the final gather
-                self.run_stage("gather", gather,
-                               [sc, p, gb.current, self.search, self.prefixes.current,
-                                self.prefix_gbs.current, res.current, self.width, self.height, direct,
-                                self.primary_weight], [self.sample_L, self.gather_slots, self.shift_events],
-                               nonfinite="nonfinite_outputs")
-                self.slot_counts += self.gather_slots.numpy().sum(axis=0, dtype=np.int64)[:3]
-                acc = self.shift_counts.setdefault("gather", np.zeros(4, np.int64))
-                acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
-                L = self.sample_L.numpy()
-            else:
-                L = direct.numpy()
-            # this sample's resampled prefixes, final suffixes and primary hits become the history
-            res.swap()
-            self.prefixes.swap()
-            self.prefix_gbs.swap()
-            if self.di is not None:
-                self.di.end_sample(camera)
-            gb.swap()
-            self.prev_camera = camera
-            moments.add(L)
-            if self.on_samples is not None:
-                self.on_samples(s + 1, self.settings["spp"])
-        shape = (self.height, self.width, 3)
-        return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
+        p = self.params(frame, sample)
+        history = self.prev_camera is not None
+        # ---- prefixes: fresh, then resampled with the previous frame's
+        if self.settings["prefix.temporal"] and history:
+            self.run_stage("prefix", prefix_kernel, [sc, p, gb.current], [self.fresh_prefixes, self.fresh_prefix_gb])
+            self.run_stage("prefix_temporal", prefix_temporal_kernel,
+                           [sc, p, self.prev_camera, gb.current, gb.previous, self.fresh_prefixes, self.fresh_prefix_gb,
+                            self.prefixes.previous, self.prefix_gbs.previous],
+                           [self.prefixes.current, self.prefix_gbs.current])
+        else:
+            self.run_stage("prefix", prefix_kernel, [sc, p, gb.current], [self.prefixes.current, self.prefix_gbs.current])
+        self.build_search(p)
+        # ---- suffixes at the resampled prefix ends, and their reuse
+        self.run_stage("suffix", suffix, [sc, p, self.prefixes.current, self.prefix_gbs.current], [res.current])
+        if self.settings["suffix.temporal"] and history:
+            self.reuse_pass("suffix_temporal", suffix_temporal_kernel,
+                            [sc, p, self.prev_camera, gb.current, gb.previous, self.prefixes.current,
+                             self.prefix_gbs.current, self.prefixes.previous, self.prefix_gbs.previous, res.previous])
+        for rd in range(self.settings["suffix.spatial.rounds"]):
+            p.pt.spatial_round = rd
+            self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
+                            [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
+                            self.settings["debug.mutation"] == "spatial_in_place")
+        # ---- the final gather
+        self.run_stage("gather", gather,
+                       [sc, p, gb.current, self.search, self.prefixes.current, self.prefix_gbs.current, res.current,
+                        self.width, self.height, direct, self.primary_weight],
+                       [self.sample_L, self.gather_slots, self.shift_events], nonfinite="nonfinite_outputs")
+        self.slot_counts += self.gather_slots.numpy().sum(axis=0, dtype=np.int64)[:3]
+        self.count_shifts("gather")
+        return self.sample_L.numpy()
+
+    def swap_history(self) -> None:
+        """This sample's resampled prefixes and their ends become the next one's history."""
+        self.prefixes.swap()
+        self.prefix_gbs.swap()
 
     def stats(self) -> dict:
-        """The base stats, ReSTIR DI's rays, shift counts per pass (suffix reuse and the gather:
-        reconnections and pure replays, tried and succeeded; reuse-dead passes) and the gather's
+        """The path-reuse stats (shifts per pass: suffix reuse and the gather) and the gather's
         slots: the fractions filled by the search, by the fallback, and left empty."""
         out = super().stats()
-        if self.di is not None:
-            out["rays"] += self.di.rays
-        shifts, dead = summarize_shifts(self.shift_counts)
         total = self.slot_counts.sum()
-        out["shifts"] = shifts
-        out["reuse_dead"] = dead
         out["gather_slots"] = {k: float(v / total) if total else 0.0
                                for k, v in zip(("search", "fallback", "empty"), self.slot_counts)}
         return out

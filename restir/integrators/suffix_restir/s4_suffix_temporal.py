@@ -12,29 +12,24 @@ Writes: suffix reservoirs (other buffer), shift counts, events.
 import warp as wp
 
 from ...device.camera import Camera
-from ...device.color import luminance
 from ...device.rng import rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import PT_TEMPORAL_DIMS_PER_SAMPLE, STAGE_SR_SUFFIX_TEMPORAL
-from ...resampling.mis import talbot_weight2
-from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
+from ...resampling.ris import cap_history, ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
-from ..restir_pt.path_sample import ORIGIN_TEMPORAL, PathReservoir, store, with_origin
-from ..restir_pt.reuse_pair import ShiftTally, make_reuse_pair, tally
+from ..restir_pt.path_sample import PathReservoir, store
+from ..restir_pt.reuse_pair import make_reuse_pair
 from ..restir_pt.shift import shift_path
 from .domains import load_domain
 from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir
 
-CURRENT = wp.constant(0)
-HISTORY = wp.constant(1)
-
 
 def make_suffix_temporal_kernel(shift=shift_path, module=None):
-    shift_in, shift_out = make_reuse_pair(shift, module)
+    _, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
     def suffix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, prev_camera: Camera, gb: GBuffer,
@@ -60,23 +55,13 @@ def make_suffix_temporal_kernel(shift=shift_path, module=None):
             return
         r = prev_reservoirs[q]
         Mq = cap_history(r.M, params.suffix_cap, 1.0)
-        hist = shift_in(scene, dc.params, r, Mq, c.M, dc.sh)
-        cur = shift_out(scene, dq.params, c, Mq, dq.sh)
-        tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
-        shifts[pixel] = tl.counts
         key = rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_SUFFIX_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.pt.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        s = ris_init()
-        p_c = luminance(c.F)
-        s = ris_merge(s, talbot_weight2(p_c * c.M, cur.d_i, CURRENT), p_c, 1.0, c.W, c.M, CURRENT,
-                      rng_uniform(key, base))
-        s = ris_merge(s, talbot_weight2(hist.d_c, hist.d_i, HISTORY), hist.p_c, hist.t.J, r.W, Mq, HISTORY,
-                      rng_uniform(key, base + wp.uint32(1)))
-        chosen = c
-        if s.selected == HISTORY:
-            chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
-        reservoirs_out[pixel] = store(chosen, ris_finalize(s, 1.0))
-        events[pixel] = stage_events(s, tl.failed, tl.rays)
+        st = temporal_pair(scene, c, dc.params, dc.sh, r, Mq, dq.params, dq.sh, rng_uniform(key, base),
+                           rng_uniform(key, base + wp.uint32(1)))
+        shifts[pixel] = st.tl.counts
+        reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
+        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
 
     return suffix_temporal_kernel
 

@@ -8,19 +8,17 @@ buffer), shift counts, events.
 """
 import warp as wp
 
-from ...device.color import luminance
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
 from ...device.scene_device import SceneDevice
 from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, DI_SPATIAL_DIM_SELECT,
                                DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_SR_SUFFIX_SPATIAL)
-from ...resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization
-from ...resampling.ris import ris_finalize, ris_init, ris_merge
+from ...resampling.mis import pairwise_normalization
+from ...resampling.ris import ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
-from ..restir_pt.path_sample import ORIGIN_SPATIAL, PathReservoir, store, with_origin
-from ..restir_pt.reuse_pair import ShiftTally, make_reuse_pair, tally
-from ..restir_pt.s3_spatial import CANONICAL
+from ..restir_pt.path_sample import PathReservoir, store
+from ..restir_pt.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
 from ..restir_pt.shift import shift_path
 from .domains import load_domain
 from .params import KERNEL_MODULE, SRParams
@@ -28,7 +26,7 @@ from .prefix import PrefixReservoir
 
 
 def make_suffix_spatial_kernel(shift=shift_path, module=None):
-    shift_in, shift_out = make_reuse_pair(shift, module)
+    _, _, _, spatial_step = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
     def suffix_spatial_kernel(offset: int, scene: SceneDevice, params: SRParams, width: int, height: int,
@@ -43,14 +41,10 @@ def make_suffix_spatial_kernel(shift=shift_path, module=None):
         if dc.sh.valid == 0:
             reservoirs_out[pixel] = c
             return
-        p_c = luminance(c.F)
         key = rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_SUFFIX_SPATIAL + params.pt.spatial_round),
                       wp.uint32(pixel))
         base = wp.uint32(params.pt.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE)
-        s = ris_init()
-        mis = pairwise_init(params.pt.spatial_k)
-        chosen = c
-        tl = ShiftTally()
+        st = spatial_start(c, params.pt.spatial_k)
         for j in range(params.pt.spatial_k):
             dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
             n = spatial_neighbor(rng_uniform2(key, dim + wp.uint32(DI_SPATIAL_DIM_OFFSET)), pixel, width, height,
@@ -60,22 +54,12 @@ def make_suffix_spatial_kernel(shift=shift_path, module=None):
             dn = load_domain(scene, params, prefixes, prefix_gb, n)
             if dn.sh.valid == 0:
                 continue
-            r = reservoirs_in[n]
-            nbr = shift_in(scene, dc.params, r, r.M, c.M, dc.sh)
-            own = shift_out(scene, dn.params, c, r.M, dn.sh)
-            tl = tally(tally(tl, r, nbr.t, nbr.tried, 1), c, own.t, own.tried, 0)
-            mis = pairwise_add_neighbor(mis, nbr.d_i, nbr.d_c, p_c * c.M, own.d_i)
-            s = ris_merge(s, mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j,
-                          rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
-            if s.selected == j:
-                chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
-        s = ris_merge(s, mis.m_c, p_c, 1.0, c.W, c.M, CANONICAL,
-                      rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
-        if s.selected == CANONICAL:
-            chosen = c
-        reservoirs_out[pixel] = store(chosen, ris_finalize(s, pairwise_normalization(mis)))
-        events[pixel] = stage_events(s, tl.failed, tl.rays)
-        shifts[pixel] = tl.counts
+            st = spatial_step(st, scene, c, dc.params, dc.sh, reservoirs_in[n], dn.params, dn.sh, j,
+                              rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
+        st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
+        reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))
+        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
+        shifts[pixel] = st.tl.counts
 
     return suffix_spatial_kernel
 

@@ -79,7 +79,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
     of prefix 0 not weighted by N: the defect S4), neighbors_over_k1_squared (the neighbour terms
     divided by (V + 1)^2, S4), drop_empty_slots (slots whose reservoir holds no suffix left out of
     the technique set: A3)."""
-    shift_in, shift_out = make_reuse_pair(shift, module)
+    shift_in, shift_out, _, _ = make_reuse_pair(shift, module)
     canonical_times_n = mutation != "canonical_not_times_n"
     over_k1_squared = mutation == "neighbors_over_k1_squared"
     drop_empty = mutation == "drop_empty_slots"

@@ -1,0 +1,169 @@
+"""What the path-reuse methods (ReSTIR PT, Suffix ReSTIR) share besides their stages: the checks
+of the settings they have in common, the primary-hit layer with ReSTIR DI on it, the frame's
+ReSTIR PT parameters, the ping-pong pass that counts its shifts, and the shift stats."""
+import numpy as np
+import warp as wp
+
+from ...device.streams import MAX_SPATIAL_ROUNDS, PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
+from ...film import PixelMoments
+from ..base import Integrator
+from ..common.primary_hits import primary_hits_kernel
+from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.reuse_domains import resolve_spatial_radius
+from ..restir_di.component import attach_direct_light, check_di_settings
+from .params import SHIFTS, PTRParams
+
+PT_MAX_DEPTH = 64  # max_depth -1 renders at this depth (path lengths are 8-bit fields)
+
+
+def summarize_shifts(shift_counts: dict) -> tuple[dict, list]:
+    """Per pass, the shifts of reconnections (paths with an rc vertex) and pure replays: tried,
+    succeeded and the success rate; and the passes whose shifts never succeeded ("reuse dead":
+    reuse that does nothing is reported, not passed; TESTING.md 5.6)."""
+    shifts, dead = {}, []
+    for stage, c in shift_counts.items():
+        kinds = {}
+        for name, (tried, ok) in (("reconnection", c[0:2]), ("replay", c[2:4])):
+            kinds[name] = {"tried": int(tried), "succeeded": int(ok), "success_rate": float(ok / tried) if tried else None}
+        shifts[stage] = kinds
+        if c[0] + c[2] > 0 and c[1] + c[3] == 0:
+            dead.append(stage)
+    return shifts, dead
+
+
+class PathReuseIntegrator(Integrator):
+    """Base of ReSTIR PT and Suffix ReSTIR. A subclass names its spatial settings (SPATIAL_KEYS:
+    rounds, neighbours, radius), its 1080-line radius and its MUTATIONS."""
+
+    SPATIAL_KEYS = ("spatial.rounds", "spatial.neighbors", "spatial.radius")
+    SPATIAL_RADIUS_1080 = 20.0
+    MUTATIONS: tuple = ("none",)
+
+    @classmethod
+    def check_path_settings(cls, settings: dict) -> None:
+        """The settings every path-reuse method has: shift, direct, candidates, spatial reuse,
+        the rc criteria, the fault injection, max_depth, and ReSTIR DI's."""
+        from ...config import ConfigError
+
+        s = settings
+        rounds, neighbors, radius = cls.SPATIAL_KEYS
+        if s["shift"] not in SHIFTS:
+            raise ConfigError(f"shift must be one of {', '.join(SHIFTS)}")
+        if s["direct"] not in ("restir-di", "pt"):
+            raise ConfigError("direct must be restir-di or pt")
+        if not 1 <= s["candidates"] <= PT_MAX_CANDIDATES:
+            raise ConfigError(f"candidates must be in [1, {PT_MAX_CANDIDATES}]")
+        if not 0 <= s[rounds] <= MAX_SPATIAL_ROUNDS or not 1 <= s[neighbors] <= PT_MAX_NEIGHBORS:
+            raise ConfigError(f"{rounds} must be in [0, {MAX_SPATIAL_ROUNDS}] and {neighbors} in [1, {PT_MAX_NEIGHBORS}]")
+        resolve_spatial_radius(s[radius], cls.SPATIAL_RADIUS_1080, 1)
+        if not s["rc.near_distance"] >= 0.0 or not s["rc.roughness"] >= 0.0:
+            raise ConfigError("rc.near_distance and rc.roughness must be >= 0")
+        if s["debug.mutation"] not in cls.MUTATIONS:
+            raise ConfigError(f"debug.mutation must be one of {', '.join(cls.MUTATIONS)}")
+        if s["max_depth"] > PT_MAX_DEPTH:
+            raise ConfigError(f"{cls.name} renders max_depth up to {PT_MAX_DEPTH} (or -1)")
+        check_di_settings(s)
+
+    def allocate_path_reuse(self) -> None:
+        """max_depth -1 as PT_MAX_DEPTH (with a note), the spatial radius, the primary-hit layer
+        (G-buffer pair, filter weights, emission) with ReSTIR DI on it, the path reservoirs
+        (ping-pong pair and pass output), the sample's radiance and the shift-count scratch."""
+        from .path_sample import PathReservoir
+
+        s = self.settings
+        if s["max_depth"] < 0:
+            s["max_depth"] = PT_MAX_DEPTH
+            self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_MAX_DEPTH}")
+        radius_key = self.SPATIAL_KEYS[2]
+        self.spatial_radius = resolve_spatial_radius(s[radius_key], self.SPATIAL_RADIUS_1080, self.height)
+        if s[radius_key] == "auto":
+            s[radius_key] = self.spatial_radius
+        self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
+        self.primary_weight = self.buffer("primary_weight", float)
+        self.emission = self.buffer("emission", wp.vec3)
+        self.reservoirs = PingPong(self.buffer(f"{self.RESERVOIRS}", PathReservoir),
+                                   self.buffer(f"{self.RESERVOIRS}_prev", PathReservoir))
+        self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir)
+        self.sample_L = self.buffer("sample_L", wp.vec3)
+        # per-pass scratch for the stats, like `events`: shift counts in reuse passes
+        self.shift_events = self.buffer("shift_events", wp.vec4i)
+        self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
+        self.prev_camera = None
+        # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
+        self.di = attach_direct_light(self)
+        # the first vertex whose events the method resamples; paths need max_depth >= first + 2
+        self.first_event = 1 if s["direct"] == "restir-di" else 0
+        self.resamples = s["max_depth"] >= self.first_event + 2
+
+    def pt_params(self, frame: int, sample: int, near_distance: float, temporal_cap: float) -> PTRParams:
+        """The frame's ReSTIR PT parameters (the path samples' shift, rc criteria and reuse)."""
+        s = self.settings
+        p = PTRParams()
+        p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
+        p.frame = wp.uint32(frame)
+        p.sample = sample
+        p.candidates = int(s["candidates"])
+        p.max_depth = int(s["max_depth"])
+        p.first_event = self.first_event
+        p.shift = int(SHIFTS[s["shift"]])
+        p.near_distance = float(near_distance)
+        p.rough_threshold = float(s["rc.roughness"])
+        p.temporal_cap = float(temporal_cap)
+        p.spatial_round = 0
+        p.spatial_k = int(s[self.SPATIAL_KEYS[1]])
+        p.spatial_radius = float(self.spatial_radius)
+        return p
+
+    def count_shifts(self, stage: str) -> None:
+        acc = self.shift_counts.setdefault(stage, np.zeros(4, np.int64))
+        acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
+
+    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
+        """The base class's ping-pong pass, with the pass's shift counts summed for the stats."""
+        super().reuse_pass(stage, kernel, inputs, (self.shift_events,), in_place)
+        self.count_shifts(stage)
+
+    def render_frame(self, frame: int):
+        """Per sample: the primary hits and the direct light (ReSTIR DI, or the emission seen
+        directly), the method's resampling passes and output (`resample_sample`), then this
+        sample's final reservoirs and primary hits become the next one's history."""
+        camera = self.camera(frame)
+        moments = PixelMoments((self.num_pixels, 3))
+        for s in range(self.settings["spp"]):
+            self.run_stage("gbuffer", primary_hits_kernel,
+                           [self.dscene.scene, camera, wp.uint32(self.settings["seed"] & 0xFFFFFFFF), wp.uint32(frame), s,
+                            int(bool(self.settings["hide_emitters"]))],
+                           [self.gbuffers.current, self.primary_weight, self.emission])
+            direct = self.emission
+            if self.di is not None:
+                self.di.resample_and_shade(frame, s)
+                direct = self.di.sample_L
+            L = self.resample_sample(frame, s, direct) if self.resamples else direct.numpy()
+            self.reservoirs.swap()
+            self.swap_history()
+            if self.di is not None:
+                self.di.end_sample(camera)
+            self.gbuffers.swap()
+            self.prev_camera = camera
+            moments.add(L)
+            if self.on_samples is not None:
+                self.on_samples(s + 1, self.settings["spp"])
+        shape = (self.height, self.width, 3)
+        return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
+
+    def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
+        """The method's passes for one sample after the primary hits; the sample's image (N, 3)."""
+        raise NotImplementedError
+
+    def swap_history(self) -> None:
+        """The method's own buffers that become history at the end of a sample (besides the path
+        reservoirs, the G-buffers and ReSTIR DI's)."""
+
+    def stats(self) -> dict:
+        """The base stats, ReSTIR DI's rays, and the reuse diagnostics (TESTING.md 5.12): the shifts
+        per pass and the reuse-dead passes."""
+        out = super().stats()
+        if self.di is not None:
+            out["rays"] += self.di.rays
+        out["shifts"], out["reuse_dead"] = summarize_shifts(self.shift_counts)
+        return out
