@@ -27,7 +27,7 @@ STAGE_SR_SUFFIX = wp.constant(52)           # the suffixes traced at the resampl
 STAGE_SR_SUFFIX_RIS = wp.constant(53)       # their streaming-RIS selections
 STAGE_SR_SUFFIX_TEMPORAL = wp.constant(54)
 STAGE_SR_GATHER_PREFIX = wp.constant(55)    # the final gather's fresh prefixes (keyed by sample and prefix)
-STAGE_SR_GATHER_SUFFIX = wp.constant(56)    # the final gather's canonical suffix
+STAGE_SR_GATHER_SUFFIX = wp.constant(56)    # the final gather's canonical suffixes (keyed as its prefixes)
 STAGE_SR_GATHER_RIS = wp.constant(57)       # its streaming-RIS selections
 STAGE_SR_GATHER_FALLBACK = wp.constant(58)  # gather slots the search left empty: random screen neighbours
 STAGE_SR_SUFFIX_SPATIAL = wp.constant(60)   # + round index, round < MAX_SPATIAL_ROUNDS
@@ -120,8 +120,8 @@ PT_MAX_NEIGHBORS = DI_MAX_NEIGHBORS
 
 # ----------------------------------------------------------------------------- Suffix ReSTIR
 # Prefixes and suffixes are keyed per path as ReSTIR PT's base paths (their bounce layout, the
-# suffix's counted from the prefix end); the gather's fresh prefix i of sample s is path
-# s * SR_MAX_GATHER_PREFIXES + i. Prefix temporal reuse: s * SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE +
+# suffix's counted from the prefix end); the gather's fresh prefix i of sample s, and the
+# canonical suffix traced from its end, are path s * SR_MAX_GATHER_PREFIXES + i. Prefix temporal reuse: s * SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE +
 # {0: the current prefix's selection, 1: the history's}; suffix temporal and spatial reuse: as
 # ReSTIR PT's. Gather fallback: slot m of prefix i of sample s uses
 # (s * SR_MAX_GATHER_PREFIXES + i) * SR_FALLBACK_DIMS_PER_PREFIX + 2 m + {0, 1} (the disk offset).

@@ -6,7 +6,8 @@ rendered once per scene and camera motion; the emissive-cap sphere against its e
 Configurations: the final gather alone (prefix and suffix reuse off) for N in {1, 2, 4} prefixes
 and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
-reconnection and replay shifts; direct=pt; the pairwise gather. Welch z per channel at image,
+reconnection and replay shifts; direct=pt; the pairwise gather; prefixes ending exactly at x3
+(non-adaptive); a canonical suffix for every prefix; the fixed search radius. Welch z per channel at image,
 tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
@@ -27,6 +28,9 @@ MATRIX = {
     "C5-replay": ({"shift": "replay"}, "none"),
     "C5-direct-pt": ({"direct": "pt"}, "none"),
     "C5-pairwise-M4": ({"gather.mis": "pairwise", "gather.suffixes": 4}, "none"),
+    "C5-prefix-exactly-x3": ({"prefix.adaptive": False, "prefix.min_length": 2}, "none"),
+    "C5-canonical-each": ({"gather.canonical_per_prefix": True}, "none"),
+    "C5-radius-fixed": ({"gather.radius_type": "fixed"}, "none"),
 }
 
 

@@ -20,6 +20,9 @@ class SRParams:
     # the suffix temporal cap and the suffix spatial neighbours/radius/round
     pt: PTRParams
     min_prefix: int           # the prefix end's smallest vertex index P (prefix.min_length)
+    adaptive: int             # prefix ends one vertex after the first rough bounce (0: exactly at min_prefix)
+    avoid_specular_end: int   # adaptive: reject specular-only prefix ends
+    avoid_short_end: int      # adaptive: reject prefix ends reached over a short segment
     short_segment: float      # a prefix end reached over a segment this short is rejected (scene units)
     prefix_cap: float         # prefix temporal reuse: history M capped to this x the current M
     suffix_cap: float         # suffix temporal reuse: history M capped to this (absolute; <= 0: none)
@@ -27,5 +30,7 @@ class SRParams:
     gather_suffixes: int      # M neighbour suffixes per prefix
     gather_mis: int           # GATHER_TALBOT or GATHER_PAIRWISE
     gather_cap: float         # neighbour confidences capped to this in the gather (absolute)
+    canonical_each: int       # a canonical suffix for every gathered prefix (weight 1), not prefix 0's x N
     box_scale: float          # a prefix end's search box half-size = box_scale x its path footprint
+    box_half: float           # > 0: every box has this half-size instead (the non-adaptive radius)
     fallback_radius: float    # unfilled gather slots: random pixels in a disk of this radius (px)

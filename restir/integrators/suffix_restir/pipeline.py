@@ -51,11 +51,13 @@ class SuffixReSTIR(PathReuseIntegrator):
                suffix_temporal_kernel, suffix_spatial_kernel, gather_kernel)
     # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
-                "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.short_segment": 0.01, "prefix.temporal": True,
+                "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.adaptive": True, "prefix.avoid_specular_end": True,
+                "prefix.avoid_short_end": True, "prefix.short_segment": 0.01, "prefix.temporal": True,
                 "prefix.temporal.cap": 50.0, "suffix.temporal": True, "suffix.temporal.cap": 50.0,
                 "suffix.spatial.rounds": 1, "suffix.spatial.neighbors": 3, "suffix.spatial.radius": "auto",
                 "gather.prefixes": 4, "gather.suffixes": 1, "gather.mis": "talbot", "gather.cap": 50.0,
-                "gather.radius": 2.0, "gather.fallback_radius": "auto", "gather.search": "hashgrid",
+                "gather.radius": 2.0, "gather.radius_type": "raycone", "gather.fallback_radius": "auto",
+                "gather.search": "hashgrid", "gather.canonical_per_prefix": False,
                 "debug.mutation": "none", **DI_SETTINGS}
     SETTINGS_DOC = {
         "shift": "the suffix shift: hybrid (replay to the first vertex that qualifies, then reconnect), "
@@ -66,6 +68,9 @@ class SuffixReSTIR(PathReuseIntegrator):
         "rc.near_distance": "hybrid: shortest suffix reconnection segment, x the scene's smallest extent",
         "rc.roughness": "glossy lobes with a linear roughness above this are rough (prefix ends, rc vertices)",
         "prefix.min_length": "the prefix end's smallest vertex index (1: x2 at the earliest)",
+        "prefix.adaptive": "the prefix ends one vertex after the first rough bounce (false: exactly at min_length)",
+        "prefix.avoid_specular_end": "adaptive prefixes: a specular-only end vertex is rejected (the search goes on)",
+        "prefix.avoid_short_end": "adaptive prefixes: an end vertex reached over a short segment is rejected",
         "prefix.short_segment": "a prefix end reached over a segment this short (x the scene's smallest extent) "
                                 "is rejected",
         "prefix.temporal": "temporal reuse of prefixes (pairwise, K = 1)",
@@ -81,7 +86,10 @@ class SuffixReSTIR(PathReuseIntegrator):
         "gather.mis": "talbot (generalized balance over neighbours and the canonical suffix) or pairwise",
         "gather.cap": "neighbour confidences capped to this in the gather (absolute; <= 0: no cap)",
         "gather.radius": "search box half-size: this x the path footprint camera -> prefix end x the pixel "
-                         "spread angle",
+                         "spread angle (raycone), or this x the scene's smallest extent / the larger image side (fixed)",
+        "gather.radius_type": "raycone (the path's footprint) or fixed",
+        "gather.canonical_per_prefix": "trace the canonical suffix for every gathered prefix (weight 1) instead of for "
+                                       "prefix 0 only, weighted by N",
         "gather.fallback_radius": "unfilled gather slots: random pixels in a disk of this radius; auto: 30 px at "
                                   "1080 lines scaled with the height, >= 2",
         "gather.search": "the prefix search structure: hashgrid (wp.HashGrid over the box centres) or bvh (wp.Bvh "
@@ -112,6 +120,8 @@ class SuffixReSTIR(PathReuseIntegrator):
             raise ConfigError(f"gather.mis must be one of {', '.join(GATHER_MIS)}")
         if s["gather.search"] not in SEARCHES:
             raise ConfigError(f"gather.search must be one of {', '.join(SEARCHES)}")
+        if s["gather.radius_type"] not in ("raycone", "fixed"):
+            raise ConfigError("gather.radius_type must be raycone or fixed")
         if not s["prefix.min_length"] >= 1:
             raise ConfigError("prefix.min_length must be >= 1")
         for k in ("prefix.short_segment", "gather.radius"):
@@ -168,6 +178,13 @@ class SuffixReSTIR(PathReuseIntegrator):
         p.gather_mis = int(GATHER_MIS[s["gather.mis"]])
         p.gather_cap = float(s["gather.cap"])
         p.box_scale = float(s["gather.radius"]) * self.spread_angle
+        p.box_half = 0.0
+        if s["gather.radius_type"] == "fixed":
+            p.box_half = float(s["gather.radius"]) * self.scene_radius / max(self.width, self.height)
+        p.adaptive = int(bool(s["prefix.adaptive"]))
+        p.avoid_specular_end = int(bool(s["prefix.avoid_specular_end"]))
+        p.avoid_short_end = int(bool(s["prefix.avoid_short_end"]))
+        p.canonical_each = int(bool(s["gather.canonical_per_prefix"]))
         p.fallback_radius = float(self.fallback_radius)
         return p
 
@@ -175,7 +192,7 @@ class SuffixReSTIR(PathReuseIntegrator):
         """Stage "search": the boxes, then the structure over them (rebuilt each frame), one timed
         stage. The hash grid's cell and query radius: the largest box's half-diagonal."""
         sc = self.dscene.scene
-        self.run_stage("search", boxes_kernel, [sc, p.box_scale, self.far_point, self.prefixes.current,
+        self.run_stage("search", boxes_kernel, [sc, p.box_scale, p.box_half, self.far_point, self.prefixes.current,
                                                 self.prefix_gbs.current],
                        [self.search.centers, self.search.halves, self.lowers, self.uppers])
         with self.timer.stage(self.stage_prefix + "search", False):

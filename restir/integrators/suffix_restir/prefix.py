@@ -4,7 +4,8 @@ pixel (temporal prefix reuse).
 
 Vertex 0 is the primary hit. A prefix ends at x_P, one vertex after the first bounce that samples
 a rough lobe, unless x_P is specular-only or reached over a segment of at most `short_segment`
-(then the search goes on), with P >= min_prefix and P + 2 <= max_depth. The prefix's events of
+(then the search goes on), with P >= min_prefix and P + 2 <= max_depth (`prefix_ends_at`; with
+prefix.adaptive=false, exactly at P = min_prefix). The prefix's events of
 length < P (NEE at x_k, emission found from x_k; from the first event on) are its internal
 contributions, summed as the path tracer sums them. A path without a prefix end is all internal.
 Prefix numbers are rng_uniform(seed, bounce_dim(k, slot)) at bounce k, as a ReSTIR PT base path's.
@@ -29,11 +30,20 @@ from .params import SRParams
 
 
 @wp.func
-def prefix_end_accepted(params: SRParams, k: int, mat: Material, dist: float) -> bool:
-    """x_k, reached by a rough lobe over a segment of length dist, ends the prefix (5.2)."""
-    if k < params.min_prefix or k + 2 > params.pt.max_depth:
+def prefix_ends_at(params: SRParams, k: int, rough_bounce: bool, mat: Material, dist: float) -> bool:
+    """x_k, reached from x_{k-1} over a segment of length dist by a lobe that was rough_bounce,
+    ends the prefix (5.2). Adaptive: the first rough bounce at or after min_prefix, unless x_k is
+    specular-only or the segment short (each rejection can be switched off); otherwise exactly
+    at min_prefix."""
+    if k + 2 > params.pt.max_depth:
         return False
-    return bsdf_has_rough_component(mat, params.pt.rough_threshold) and dist > params.short_segment
+    if params.adaptive == 0:
+        return k == params.min_prefix
+    if k < params.min_prefix or not rough_bounce:
+        return False
+    if params.avoid_specular_end != 0 and not bsdf_has_rough_component(mat, params.pt.rough_threshold):
+        return False
+    return params.avoid_short_end == 0 or dist > params.short_segment
 
 
 @wp.struct
@@ -86,7 +96,7 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
             break
         mat_next = material_at(scene, nh.tri, nh.uv)
         out.footprint += fd.dist
-        if rough and prefix_end_accepted(params, k + 1, mat_next, fd.dist):
+        if prefix_ends_at(params, k + 1, rough, mat_next, fd.dist):
             out.valid = 1
             out.length = k + 1
             out.hit = nh
@@ -210,8 +220,7 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
             return res
         seg = segment(hit.p, hit.ng, nh.p)
         mat_next = material_at(scene, nh.tri, nh.uv)
-        if lobe_is_rough(mat, sc.bs.lobe, params.pt.rough_threshold) and prefix_end_accepted(params, k + 1, mat_next,
-                                                                                            seg[3]):
+        if prefix_ends_at(params, k + 1, lobe_is_rough(mat, sc.bs.lobe, params.pt.rough_threshold), mat_next, seg[3]):
             return res  # the destination's prefix would end here, before x_P
         footprint += seg[3]
         hit = nh
@@ -219,12 +228,10 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
         frame = frame_from_normal(nh.ns)
         wi = to_local(frame, -sc.d)
         k += 1
-    # reconnect x_{P-1} -> x_P with the recorded lobe, which must be rough here
-    if not lobe_is_rough(mat, lobe, params.pt.rough_threshold):
-        return res
+    # reconnect x_{P-1} -> x_P with the recorded lobe: the destination's prefix must end at x_P too
     seg = segment(hit.p, hit.ng, end.hit.p)
     dist = seg[3]
-    if not prefix_end_accepted(params, P, end.mat, dist):
+    if not prefix_ends_at(params, P, lobe_is_rough(mat, lobe, params.pt.rough_threshold), end.mat, dist):
         return res
     d = wp.vec3(seg[0], seg[1], seg[2])
     e = eval_lobe(mat, wi, to_local(frame, d), lobe)

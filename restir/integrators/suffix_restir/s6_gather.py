@@ -207,20 +207,20 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
                 if wp.static(over_k1_squared):
                     V = techniques(slots, params, suffixes)
                     S = S / ((V + 1.0) * (V + 1.0))
-                # ---- the canonical suffix: prefix 0 only, weighted by N
-                if i == 0:
+                # ---- the canonical suffix: prefix 0 only, weighted by N (or every prefix, weight 1)
+                if i == 0 or params.canonical_each != 0:
                     skey = hash_combine(rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_GATHER_SUFFIX),
-                                                wp.uint32(pixel)), wp.uint32(params.pt.sample))
+                                                wp.uint32(pixel)), path_id)
                     rkey = hash_combine(rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_GATHER_RIS),
-                                                wp.uint32(pixel)), wp.uint32(params.pt.sample))
+                                                wp.uint32(pixel)), path_id)
                     xc = canonical_suffix(scene, dst, skey, rkey)
                     tl.rays += xc.rays
                     if holds_path(xc.r) and xc.r.W > 0.0:
                         m_c = canonical_weight(scene, params, slots, xc.r, prefixes, prefix_gb, suffixes)
-                        if wp.static(canonical_times_n):
-                            S += xc.r.F * (xc.r.W * m_c * float(N))
-                        else:
-                            S += xc.r.F * (xc.r.W * m_c)
+                        n_c = float(N)
+                        if params.canonical_each != 0 or not wp.static(canonical_times_n):
+                            n_c = 1.0
+                        S += xc.r.F * (xc.r.W * m_c * n_c)
                 total += wp.cw_mul(pf.thp, S)
             L += total * (primary_weight[pixel] / float(N))
         sample_L[pixel] = L

@@ -9,7 +9,9 @@ one of two structures (the same code on the CPU and CUDA, rebuilt every frame):
 Both find the same pixels: those whose box contains the query point x and whose centre lies
 within the box's half-diagonal (|c - x|^2 < 3 r^2, 5.9), the M closest first, never one at
 distance exactly 0. A pixel's box has centre x_P and half-size r = box_scale x footprint
-(box_scale = the radius multiplier x the pixel spread angle); pixels without a prefix end get an
+(box_scale = the radius multiplier x the pixel spread angle: the ray cone of the path; or, with
+gather.radius_type=fixed, the multiplier x the scene's smallest extent over the larger image
+side, 5.9); pixels without a prefix end get an
 empty box at a point far outside the scene. Which pixels are found depends on prefix ends only,
 never on suffix samples. (Measured costs of the two: BENCHMARKS.md.)
 """
@@ -43,7 +45,7 @@ class SearchStructure:
 
 
 @wp.kernel(module=KERNEL_MODULE)
-def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, far: wp.vec3,
+def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, box_half: float, far: wp.vec3,
                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, centers: wp.array(dtype=wp.vec3),
                  halves: wp.array(dtype=float), lowers: wp.array(dtype=wp.vec3), uppers: wp.array(dtype=wp.vec3),
                  events: wp.array(dtype=wp.vec4i)):
@@ -57,6 +59,8 @@ def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, far: wp.vec3
         b = prefix_gb.bary[pixel]
         c = surface_at(scene, prefix_gb.tri[pixel], b[0], b[1], 0.0).p
         h = box_scale * r.footprint
+        if box_half > 0.0:  # the fixed radius (gather.radius_type=fixed)
+            h = box_half
     centers[pixel] = c
     halves[pixel] = h
     if lowers.shape[0] > 0:  # the BVH's corners (empty arrays with the hash grid)
