@@ -190,7 +190,7 @@ class SuffixReSTIR(PathReuseIntegrator):
 
     def build_search(self, p: SRParams) -> None:
         """Stage "search": the boxes, then the structure over them (rebuilt each frame), one timed
-        stage. The hash grid's cell and query radius: the largest box's half-diagonal."""
+        stage. The hash grid's cell width and query radius: the largest box's half-size."""
         sc = self.dscene.scene
         self.run_stage("search", boxes_kernel, [sc, p.box_scale, p.box_half, self.far_point, self.prefixes.current,
                                                 self.prefix_gbs.current],
@@ -202,7 +202,10 @@ class SuffixReSTIR(PathReuseIntegrator):
                 else:
                     self.structure.rebuild()
             else:
-                radius = max(float(np.sqrt(3.0) * self.search.halves.numpy().max()), 1e-6 * self.scene_radius)
+                # A box holding x has its centre within its half-size of x in every axis, so the
+                # cells overlapping the cube of the largest half-size around x hold every candidate
+                # (Warp's query visits the cells of [x - r, x + r]^3, unfiltered).
+                radius = max(float(self.search.halves.numpy().max()), 1e-6 * self.scene_radius)
                 if self.structure is None:
                     self.structure = wp.HashGrid(128, 128, 128, device=self.device)
                 self.structure.build(self.search.centers, radius)

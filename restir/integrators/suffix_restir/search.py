@@ -2,8 +2,9 @@
 around its resampled prefix end, and the query that finds a fresh prefix end's neighbours, over
 one of two structures (the same code on the CPU and CUDA, rebuilt every frame):
 
-- `hashgrid` (default): Warp's hash grid over the box centres (`wp.HashGrid`), queried within
-  the largest box's half-diagonal, each candidate then tested against its own box;
+- `hashgrid` (default): Warp's hash grid over the box centres (`wp.HashGrid`, cells as wide as
+  the largest box's half-size), queried over the cube of that half-size around the point, each
+  candidate then tested against its own box;
 - `bvh`: Warp's BVH over the boxes (`wp.Bvh`), queried with the point's degenerate box.
 
 Both find the same pixels: those whose box contains the query point x and whose centre lies
@@ -39,7 +40,7 @@ SEARCHES = {"hashgrid": SEARCH_HASHGRID, "bvh": SEARCH_BVH}
 class SearchStructure:
     kind: int                         # SEARCH_HASHGRID or SEARCH_BVH
     id: wp.uint64                     # the hash grid's or the BVH's id
-    radius: float                     # hash grid: the query radius (the largest box's half-diagonal)
+    radius: float                     # hash grid: the query's half-size (the largest box's half-size)
     centers: wp.array(dtype=wp.vec3)  # the boxes: centre and half-size
     halves: wp.array(dtype=float)
 
