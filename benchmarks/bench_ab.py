@@ -1,4 +1,5 @@
-"""Same-run A/B of the path tracer between two checkouts of restir (per-spp time ratio).
+"""Same-run A/B of a method (the path tracer by default) between two checkouts of restir (per-frame
+time ratio).
 
     .venv/bin/python benchmarks/bench_ab.py --a /path/to/old/checkout --b . --rounds 5
 
@@ -21,7 +22,7 @@ from restir.api import make_integrator, _init_warp
 _init_warp()
 scene = restir.load_scene(sys.argv[1])
 scene.camera.width = scene.camera.height = int(sys.argv[2])
-integ = make_integrator(scene, RenderConfig(method="pt", spp=int(sys.argv[3]), settings=json.loads(sys.argv[5])))
+integ = make_integrator(scene, RenderConfig(method=sys.argv[6], spp=int(sys.argv[3]), settings=json.loads(sys.argv[5])))
 integ.render_frame(0)
 t = []
 for f in range(int(sys.argv[4])):
@@ -34,7 +35,7 @@ def run(path, args):
     # the checkout's own package first: `python -c` puts the working folder ahead of everything
     env = dict(os.environ, PYTHONPATH=os.path.abspath(path))
     out = subprocess.run([sys.executable, "-c", CHILD, args.scene, str(args.size), str(args.spp), str(args.frames),
-                          args.settings], env=env, cwd=os.path.abspath(path), capture_output=True, text=True,
+                          args.settings, args.method], env=env, cwd=os.path.abspath(path), capture_output=True, text=True,
                          check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -49,6 +50,7 @@ def main():
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--settings", default="{}", help="method settings as JSON")
+    ap.add_argument("--method", default="pt")
     args = ap.parse_args()
     ms = {"a": [], "b": []}
     for r in range(args.rounds):

@@ -97,7 +97,7 @@ def event_record(F: wp.vec3, flags: int, seed: wp.uint32, rc_tri: int, rc_bary: 
     return r
 
 
-@wp.func
+@wp.func(inline=False)  # out of line: one copy per module however many stages trace base paths
 def trace_base_path(scene: SceneDevice, params: PTRParams, x0: Shading, seed: wp.uint32, ris_key: wp.uint32,
                     index_base: int, acc: BasePath) -> BasePath:
     """Trace one base path from the primary hit x0 with random-number key `seed` and stream its

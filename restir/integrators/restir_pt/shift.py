@@ -285,7 +285,10 @@ def make_shift(mutation: str = "none"):
             res.valid = 1
         return res
 
-    @wp.func(module=module)
+    # Out of line (CUDA __noinline__): called from several places of one kernel (both directions of
+    # every pair, the gather's techniques), inlined copies made the CUDA build of a module take
+    # minutes; one call's overhead is nothing beside a shift's work.
+    @wp.func(module=module, inline=False)
     def shift_path(scene: SceneDevice, params: PTRParams, r: PathReservoir, dst: Shading) -> ShiftResult:
         """r's path moved to the primary hit dst (see the module docstring); invalid if it fails."""
         res = ShiftResult()

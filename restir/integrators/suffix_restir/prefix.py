@@ -61,7 +61,7 @@ class Prefix:
     rays: int
 
 
-@wp.func
+@wp.func(inline=False)  # out of line: one copy per module (the prefix stage and the gather trace prefixes)
 def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uint32) -> Prefix:
     """Trace from the primary hit x0 with the key `seed` until the prefix end (or the path's end)."""
     out = Prefix()
@@ -189,7 +189,7 @@ class PrefixShift:
     rays: int
 
 
-@wp.func
+@wp.func(inline=False)
 def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: Shading, dst: Shading) -> PrefixShift:
     """Replay r's bounces 0..P-2 from dst with r's numbers, then reconnect the replayed x_{P-1}
     to r's end x_P (`end`). Fails when the replay breaks, when a replayed vertex would end the
