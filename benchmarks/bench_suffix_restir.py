@@ -39,7 +39,7 @@ import restir
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
 REPORT_STAGES = {  # the report's six stages -> our stage names
-    "1 prefix generation + temporal reuse": ("prefix", "prefix_temporal"),
+    "1 prefix generation + temporal reuse": ("prefix",),
     "2 prefix spatial reuse": (),
     "3 suffix generation + temporal reuse": ("suffix", "suffix_temporal"),
     "4 suffix spatial reuse": ("suffix_spatial",),

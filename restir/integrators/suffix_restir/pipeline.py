@@ -17,7 +17,7 @@ from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC
 from ..restir_pt.path_reuse import PathReuseIntegrator
 from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
-from .s1_prefix import prefix_kernel, prefix_temporal_kernel
+from .s1_prefix import prefix_kernel
 from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
 from .s4_suffix_temporal import suffix_temporal_kernel
 from .s5_suffix_spatial import suffix_spatial_kernel
@@ -45,9 +45,9 @@ def stage_kernels(mutation: str) -> tuple:
 
 class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
-    STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix",
-              "prefix_temporal", "search", "suffix", "suffix_temporal", "suffix_spatial", "gather")
-    KERNELS = (primary_hits_kernel, prefix_kernel, prefix_temporal_kernel, boxes_kernel, suffix_kernel,
+    STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix", "search",
+              "suffix", "suffix_temporal", "suffix_spatial", "gather")
+    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, suffix_kernel,
                suffix_temporal_kernel, suffix_spatial_kernel, gather_kernel)
     # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
@@ -138,9 +138,7 @@ class SuffixReSTIR(PathReuseIntegrator):
                                                       self.height)
         if s["gather.fallback_radius"] == "auto":
             s["gather.fallback_radius"] = self.fallback_radius
-        # prefixes: this frame's fresh ones, the resampled ones (this frame's and the previous)
-        self.fresh_prefixes = self.buffer("prefixes_fresh", PrefixReservoir)
-        self.fresh_prefix_gb = allocate_gbuffer(self, "prefix_gbuffer_fresh")
+        # prefixes: the resampled ones (this frame's and the previous)
         self.prefixes = PingPong(self.buffer("prefixes", PrefixReservoir), self.buffer("prefixes_prev", PrefixReservoir))
         self.prefix_gbs = PingPong(allocate_gbuffer(self, "prefix_gbuffer"), allocate_gbuffer(self, "prefix_gbuffer_prev"))
         # the search structure: a box per pixel (centre and half-size; corners for the BVH)
@@ -218,15 +216,11 @@ class SuffixReSTIR(PathReuseIntegrator):
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         history = self.prev_camera is not None
-        # ---- prefixes: fresh, then resampled with the previous frame's
-        if self.settings["prefix.temporal"] and history:
-            self.run_stage("prefix", prefix_kernel, [sc, p, gb.current], [self.fresh_prefixes, self.fresh_prefix_gb])
-            self.run_stage("prefix_temporal", prefix_temporal_kernel,
-                           [sc, p, self.prev_camera, gb.current, gb.previous, self.fresh_prefixes, self.fresh_prefix_gb,
-                            self.prefixes.previous, self.prefix_gbs.previous],
-                           [self.prefixes.current, self.prefix_gbs.current])
-        else:
-            self.run_stage("prefix", prefix_kernel, [sc, p, gb.current], [self.prefixes.current, self.prefix_gbs.current])
+        # ---- prefixes: fresh, resampled with the previous frame's
+        temporal = int(bool(self.settings["prefix.temporal"] and history))
+        self.run_stage("prefix", prefix_kernel, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
+                                                 gb.previous, self.prefixes.previous, self.prefix_gbs.previous],
+                       [self.prefixes.current, self.prefix_gbs.current])
         self.build_search(p)
         # ---- suffixes at the resampled prefix ends, and their reuse
         self.run_stage("suffix", suffix, [sc, p, self.prefixes.current, self.prefix_gbs.current], [res.current])

@@ -1,18 +1,17 @@
-"""Stages "prefix" and "prefix_temporal" (ALGORITHMS.md 5.4 steps 1-3, 5.6).
+"""Stage "prefix": prefix generation and temporal reuse, the report's stage 1 (ALGORITHMS.md 5.4
+steps 1-3, 5.6), one kernel.
 
-prefix: a fresh prefix from each pixel's primary hit (prefix.py): its reservoir (M = 1, W = 1 in
-primary sample space, target p_hat = luminance of its throughput) and its end in the fresh prefix
-G-buffer. A pixel with a primary hit but no prefix end keeps M = 1 and no prefix.
-Reads: scene, G-buffer. Writes: fresh prefixes, fresh prefix G-buffer, events.
-
-prefix_temporal: the fresh prefix with the previous frame's resampled prefix of the pixel that saw
-this primary hit (reprojection, surface similarity), generalized balance over the two (pairwise
-with K = 1), the history's M capped to prefix_cap x the current before any weight. Both prefixes
-are shifted (shift_prefix): the history's into this pixel, this one's into the previous pixel's
+A fresh prefix from each pixel's primary hit (prefix.py): its reservoir (M = 1, W = 1 in primary
+sample space, target p_hat = luminance of its throughput) and its end. A pixel with a primary hit
+but no prefix end has M = 1 and no prefix. With temporal reuse (and a previous frame), the fresh
+prefix is then resampled with the previous frame's resampled prefix of the pixel that saw this
+primary hit (reprojection, surface similarity), generalized balance over the two (pairwise with
+K = 1), the history's M capped to prefix_cap x the current before any weight. Both prefixes are
+shifted (shift_prefix): the history's into this pixel, the fresh one into the previous pixel's
 domain (its primary hit under the previous camera). The winner's end becomes this pixel's suffix
-domain. Reads: G-buffers (this frame's and the previous), previous camera, fresh prefixes and
-their G-buffer, previous resampled prefixes and their G-buffer. Writes: resampled prefixes and
-their G-buffer (other buffers), events.
+domain. The fresh prefix lives in registers only: no buffer holds it between two passes.
+Reads: G-buffers (this frame's and the previous), previous camera, previous resampled prefixes
+and their G-buffer. Writes: resampled prefixes and their G-buffer (other buffers), events.
 """
 import warp as wp
 
@@ -26,9 +25,10 @@ from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
-from ..common.shading import load_shading
+from ..common.shading import Shading, load_shading
 from .params import KERNEL_MODULE, SRParams
-from .prefix import NO_PREFIX, PrefixReservoir, has_prefix, prefix_flags, shift_prefix, trace_prefix
+from .prefix import (NO_PREFIX, PrefixReservoir, has_prefix, prefix_end_shading, prefix_flags, shift_prefix,
+                     trace_prefix)
 
 CURRENT = wp.constant(0)
 HISTORY = wp.constant(1)
@@ -42,46 +42,54 @@ def write_end(gb: GBuffer, pixel: int, tri: int, bary: wp.vec2, dist: float, d: 
     gb.dir[pixel] = d
 
 
+@wp.struct
+class FreshPrefix:
+    """This frame's prefix of a pixel: its reservoir (M = 1, W = 1 in PSS, p_hat = luminance of
+    the throughput) and its end (the suffix domain it would give) as traced and as stored."""
+    r: PrefixReservoir
+    end: Shading
+    dist: float
+    dir: wp.vec3
+    rays: int
+
+
+@wp.func
+def fresh_prefix(scene: SceneDevice, params: SRParams, sh: Shading, pixel: int) -> FreshPrefix:
+    f = FreshPrefix()
+    f.r.flags = NO_PREFIX
+    if sh.valid == 0:
+        return f
+    key = hash_combine(rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_PREFIX), wp.uint32(pixel)),
+                       wp.uint32(params.pt.sample))
+    p = trace_prefix(scene, params, sh, key)
+    f.rays = p.rays
+    f.r.M = 1.0
+    if p.valid != 0:
+        f.r.W = 1.0
+        f.r.p_hat = luminance(p.thp)
+        f.r.jac = p.jac
+        f.r.footprint = p.footprint
+        f.r.seed = key
+        f.r.flags = prefix_flags(p.length, p.lobe)
+        f.end = prefix_end_shading(scene, p)
+        f.dist = p.dist
+        f.dir = p.dir
+    return f
+
+
 @wp.kernel(module=KERNEL_MODULE)
-def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, gb: GBuffer,
+def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, prev_camera: Camera, gb: GBuffer,
+                  prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
                   prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=wp.vec4i)):
     pixel = wp.tid() + offset
-    out = PrefixReservoir()
-    out.flags = NO_PREFIX
-    write_end(prefix_gb, pixel, -1, wp.vec2(0.0), 0.0, wp.vec3(0.0))
-    rays = int(0)
-    sh = load_shading(scene, gb, pixel)
-    if sh.valid != 0:
-        key = hash_combine(rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_PREFIX), wp.uint32(pixel)),
-                           wp.uint32(params.pt.sample))
-        p = trace_prefix(scene, params, sh, key)
-        rays = p.rays
-        out.M = 1.0
-        if p.valid != 0:
-            out.W = 1.0
-            out.p_hat = luminance(p.thp)
-            out.jac = p.jac
-            out.footprint = p.footprint
-            out.seed = key
-            out.flags = prefix_flags(p.length, p.lobe)
-            write_end(prefix_gb, pixel, p.hit.tri, p.hit.bary, p.dist, p.dir)
-    prefixes[pixel] = out
-    events[pixel] = wp.vec4i(0, 0, 0, rays)
-
-
-@wp.kernel(module=KERNEL_MODULE)
-def prefix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, prev_camera: Camera, gb: GBuffer,
-                           prev_gb: GBuffer, fresh: wp.array(dtype=PrefixReservoir), fresh_gb: GBuffer,
-                           prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
-                           prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
-                           events: wp.array(dtype=wp.vec4i)):
-    pixel = wp.tid() + offset
-    c = fresh[pixel]
-    prefixes[pixel] = c
-    write_end(prefix_gb, pixel, fresh_gb.tri[pixel], fresh_gb.bary[pixel], fresh_gb.t[pixel], fresh_gb.dir[pixel])
-    events[pixel] = wp.vec4i(0)
     sc = load_shading(scene, gb, pixel)
-    if sc.valid == 0:
+    fresh = fresh_prefix(scene, params, sc, pixel)
+    c = fresh.r
+    prefixes[pixel] = c
+    write_end(prefix_gb, pixel, wp.where(has_prefix(c), fresh.end.hit.tri, -1), fresh.end.hit.bary, fresh.dist,
+              fresh.dir)
+    events[pixel] = wp.vec4i(0, 0, 0, fresh.rays)
+    if temporal == 0 or sc.valid == 0:
         return
     nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
     if nq.pixel == NO_PIXEL:
@@ -89,13 +97,11 @@ def prefix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, pr
     q = nq.pixel
     r = prev_prefixes[q]
     Mq = cap_history(r.M, params.prefix_cap, c.M)
-    c_end = load_shading(scene, fresh_gb, pixel)
-    c_end.valid = wp.where(has_prefix(c), c_end.valid, 0)
     q_end = load_shading(scene, prev_prefix_gb, q)
     q_end.valid = wp.where(has_prefix(r), q_end.valid, 0)
     # the history's prefix here, and this prefix at the previous pixel's primary hit
     hist = shift_prefix(scene, params, r, q_end, sc)
-    cur = shift_prefix(scene, params, c, c_end, nq.sh)
+    cur = shift_prefix(scene, params, c, fresh.end, nq.sh)
     p_q_at_y = float(0.0)
     d_q_at_y = float(0.0)
     if hist.valid != 0:
@@ -126,4 +132,4 @@ def prefix_temporal_kernel(offset: int, scene: SceneDevice, params: SRParams, pr
     out.M = f.M
     prefixes[pixel] = out
     failed = wp.where(has_prefix(r) and r.W > 0.0 and hist.valid == 0, 1, 0)
-    events[pixel] = stage_events(s, failed, hist.rays + cur.rays)
+    events[pixel] = stage_events(s, failed, fresh.rays + hist.rays + cur.rays)
