@@ -41,7 +41,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 REPORT_STAGES = {  # the report's six stages -> our stage names
     "1 prefix generation + temporal reuse": ("prefix",),
     "2 prefix spatial reuse": (),
-    "3 suffix generation + temporal reuse": ("suffix", "suffix_temporal"),
+    "3 suffix generation + temporal reuse": ("suffix",),
     "4 suffix spatial reuse": ("suffix_spatial",),
     "5 prefix search structure": ("search",),
     "6 final gather": ("gather",),

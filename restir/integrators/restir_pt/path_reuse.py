@@ -36,6 +36,7 @@ class PathReuseIntegrator(Integrator):
     rounds, neighbours, radius), its 1080-line radius and its MUTATIONS."""
 
     SPATIAL_KEYS = ("spatial.rounds", "spatial.neighbors", "spatial.radius")
+    PASS_BUFFER = True  # a third path-reservoir buffer for the reuse passes' output (ping-pong)
     SPATIAL_RADIUS_1080 = 20.0
     MUTATIONS: tuple = ("none",)
 
@@ -83,7 +84,8 @@ class PathReuseIntegrator(Integrator):
         self.emission = self.buffer("emission", wp.vec3)
         self.reservoirs = PingPong(self.buffer(f"{self.RESERVOIRS}", PathReservoir),
                                    self.buffer(f"{self.RESERVOIRS}_prev", PathReservoir))
-        self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir)
+        if self.PASS_BUFFER:
+            self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir)
         self.sample_L = self.buffer("sample_L", wp.vec3)
         # per-pass scratch for the stats, like `events`: shift counts in reuse passes
         self.shift_events = self.buffer("shift_events", wp.vec4i)

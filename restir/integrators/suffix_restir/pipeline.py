@@ -19,7 +19,6 @@ from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
 from .s1_prefix import prefix_kernel
 from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
-from .s4_suffix_temporal import suffix_temporal_kernel
 from .s5_suffix_spatial import suffix_spatial_kernel
 from .s6_gather import GATHER_MUTATIONS, gather_kernel, make_gather
 from .search import SEARCHES, SearchStructure, boxes_kernel
@@ -46,9 +45,8 @@ def stage_kernels(mutation: str) -> tuple:
 class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix", "search",
-              "suffix", "suffix_temporal", "suffix_spatial", "gather")
-    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, suffix_kernel,
-               suffix_temporal_kernel, suffix_spatial_kernel, gather_kernel)
+              "suffix", "suffix_spatial", "gather")
+    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, suffix_kernel, suffix_spatial_kernel, gather_kernel)
     # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
                 "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.adaptive": True, "prefix.avoid_specular_end": True,
@@ -104,6 +102,9 @@ class SuffixReSTIR(PathReuseIntegrator):
 
     SPATIAL_KEYS = ("suffix.spatial.rounds", "suffix.spatial.neighbors", "suffix.spatial.radius")
     RESERVOIRS = "suffixes"
+    # No third suffix buffer: the suffix stage reads the history and writes the other buffer, so
+    # the spatial rounds ping-pong between that one and the history's, which is free by then.
+    PASS_BUFFER = False
 
     @staticmethod
     def check_settings(settings: dict) -> None:
@@ -222,17 +223,21 @@ class SuffixReSTIR(PathReuseIntegrator):
                                                  gb.previous, self.prefixes.previous, self.prefix_gbs.previous],
                        [self.prefixes.current, self.prefix_gbs.current])
         self.build_search(p)
-        # ---- suffixes at the resampled prefix ends, and their reuse
-        self.run_stage("suffix", suffix, [sc, p, self.prefixes.current, self.prefix_gbs.current], [res.current])
-        if self.settings["suffix.temporal"] and history:
-            self.reuse_pass("suffix_temporal", suffix_temporal_kernel,
-                            [sc, p, self.prev_camera, gb.current, gb.previous, self.prefixes.current,
-                             self.prefix_gbs.current, self.prefixes.previous, self.prefix_gbs.previous, res.previous])
+        # ---- suffixes at the resampled prefix ends: new, resampled with the previous frame's, then
+        # spatial rounds (they write into the history's buffer, free once the suffix stage read it)
+        temporal = int(bool(self.settings["suffix.temporal"] and history))
+        self.run_stage("suffix", suffix, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
+                                          gb.previous, self.prefixes.current, self.prefix_gbs.current,
+                                          self.prefixes.previous, self.prefix_gbs.previous, res.previous],
+                       [res.current, self.shift_events])
+        self.count_shifts("suffix")
         for rd in range(self.settings["suffix.spatial.rounds"]):
             p.pt.spatial_round = rd
+            self.pass_out = res.previous
             self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
                             [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
                             self.settings["debug.mutation"] == "spatial_in_place")
+            res.previous = self.pass_out
         # ---- the final gather
         self.run_stage("gather", gather,
                        [sc, p, gb.current, self.search, self.prefixes.current, self.prefix_gbs.current, res.current,
