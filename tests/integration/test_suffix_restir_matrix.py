@@ -40,4 +40,4 @@ MATRIX = {
 def test_suffix_restir_matrix(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
-    run_cell(name, "suffix-restir", settings, motion)
+    run_cell(name, "suffix-restir", settings, motion, config)
