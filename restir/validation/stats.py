@@ -182,10 +182,15 @@ class ZTestReport:
         # samples across the image (Suffix ReSTIR's gather, wide spatial reuse) moves every pixel
         # of a run together, so a run-to-run shift of the whole image, well within the image
         # test's threshold, would push many pixels past |z| = 3 at once; the tail fraction is
-        # therefore taken after taking out the image's relative deviation.
+        # therefore taken after taking out the image's relative deviation. A pixel counts only
+        # when it deviates both from the reference and from the reference scaled by that common
+        # deviation: noiseless pixels (emitters, a constant background; variance 0) match the
+        # reference exactly and are not moved by shared reuse noise, so scaling their reference
+        # would turn an exact match into an infinite z.
         scale = self.image_mean / self.image_ref if self.image_ref != 0 else 1.0
-        local_z = np.where(unjudged, 0.0, self._z(mean - scale * ref, ref, np.sqrt(v)))
-        self.tail = float(np.mean(np.abs(local_z) > self.tail_crit))
+        local_z = np.minimum(np.abs(self.pixel_z), np.abs(self._z(mean - scale * ref, ref, np.sqrt(v))))
+        local_z = np.where(unjudged, 0.0, local_z)
+        self.tail = float(np.mean(local_z > self.tail_crit))
         # At most 1% beyond |z| > 3 (0.27% expected); on small images binomial noise alone can
         # exceed 1%, so the limit is at least the 1 - 1e-4 binomial quantile at twice 0.27%.
         self.tail_limit = max(0.01, float(sps.binom.isf(1e-4, self.pixels, 2 * 0.0027)) / self.pixels)

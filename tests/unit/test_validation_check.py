@@ -103,3 +103,21 @@ def test_tail_check_looks_for_local_biases():
     b[:, :8, :8] += 4 * 0.01 / np.sqrt(k)
     r = ZTestReport(b.mean(0), b.var(0, ddof=1) / k, 1.0, 0.0, batches=b, df=k - 1)
     assert r.tail > r.tail_limit and not r.passed
+
+
+def test_tail_check_keeps_noiseless_pixels_exact():
+    """Noiseless pixels (an emitter seen directly, a constant background: variance 0, equal to
+    the reference) stay out of the tail when the noisy rest of the image carries a small common
+    deviation; scaling their reference by it would give them an infinite z (the regression that
+    failed 39 fast-tier tests: every emitter and background pixel counted in the tail)."""
+    from restir.validation.stats import ZTestReport
+
+    rng = np.random.default_rng(9)
+    k = 64
+    common = rng.normal(0, 1, (k, 1, 1))  # one shift per run, shared by every noisy pixel
+    a = 1.0 + 0.01 * (0.3 * rng.normal(size=(k, 32, 32)) + common)
+    a = a - a.mean() + 1.0 - 2.5 * a.std(0, ddof=1).mean() / np.sqrt(k)
+    a[:, :, :8] = 5.0  # a quarter of the image noiseless and exact
+    ref = np.where(np.arange(32) < 8, 5.0, 1.0)[None, :].repeat(32, 0)
+    r = ZTestReport(a.mean(0), a.var(0, ddof=1) / k, ref, 0.0, batches=a, df=k - 1)
+    assert r.tail <= r.tail_limit and r.passed
