@@ -3,7 +3,7 @@ PY ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench clean
+.PHONY: demo test test-slow bench clean browser
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PY) -m venv $(VENV)
@@ -15,10 +15,16 @@ demo: $(STAMP)
 	$(VENV)/bin/restir render builtin:cornell-box --width 512 --height 512 --spp 16 \
 		-o out/cornell-box.exr --png out/cornell-box.png --stats out/cornell-box.json
 
-test: $(STAMP)
+# The report test drives Debian's chromium with chromedriver (Selenium); nothing downloads a browser.
+browser:
+	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || { \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -q && $$SUDO apt-get install -y -q chromium chromium-driver; }
+
+test: $(STAMP) browser
 	$(VENV)/bin/pytest -q
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) browser
 	$(VENV)/bin/pytest -q -m slow
 
 clean:

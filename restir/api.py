@@ -254,6 +254,29 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
     return integ
 
 
+def sized_scene(scene: Scene, config: RenderConfig) -> Scene:
+    """`scene` with the film size config.width / config.height where they are given (a copy;
+    the scene itself is left as it is)."""
+    if config.width or config.height:
+        scene = copy.copy(scene)
+        scene.camera = copy.copy(scene.camera)
+        scene.camera.width = config.width or scene.camera.width
+        scene.camera.height = config.height or scene.camera.height
+    return scene
+
+
+def check_device(config: RenderConfig):
+    """Initialize Warp for config.device and refuse a device this machine lacks; returns warp."""
+    wp = _init_warp(config.device)
+    if config.device.startswith("cuda") and wp.get_cuda_device_count() == 0:
+        raise ConfigError(f"device '{config.device}' is not available: no CUDA device on this machine")
+    try:
+        wp.get_device(config.device)
+    except Exception:
+        raise ConfigError(f"device '{config.device}' is not available") from None
+    return wp
+
+
 def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_compile=None,
            **settings) -> RenderResult:
     """Render `config.frames` frames and return their average with stats.
@@ -274,18 +297,8 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_c
                               "method settings go in settings={...})")
         config = dataclasses.replace(config, **settings)
     config.validate()
-    wp = _init_warp(config.device)
-    if config.device.startswith("cuda") and wp.get_cuda_device_count() == 0:
-        raise ConfigError(f"device '{config.device}' is not available: no CUDA device on this machine")
-    try:
-        wp.get_device(config.device)
-    except Exception:
-        raise ConfigError(f"device '{config.device}' is not available") from None
-    if config.width or config.height:
-        scene = copy.copy(scene)
-        scene.camera = copy.copy(scene.camera)
-        scene.camera.width = config.width or scene.camera.width
-        scene.camera.height = config.height or scene.camera.height
+    check_device(config)
+    scene = sized_scene(scene, config)
     stop: list = []
     with _sigint_between_frames(stop):
         t_setup = time.perf_counter()

@@ -136,6 +136,32 @@ def build_parser() -> argparse.ArgumentParser:
                    "diagonals per frame")
     v.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
     v.add_argument("--zmap", metavar="FILE", help="write the per-pixel z map here (.png, .exr, .npy)")
+    c = sub.add_parser("compare", formatter_class=_Formatter, epilog=_builtins_epilog(),
+                       help="compare methods at equal time or equal samples against a reference (metrics, report)")
+    c.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
+    c.add_argument("--method", dest="methods", action="append", default=[], metavar="NAME[:key=value,...]",
+                   help="a method to compare, with its settings (spp=N: samples per pixel per frame); repeat "
+                        "for each method, e.g. --method pt --method 'restir-di:spatial.neighbors=8'")
+    c.add_argument("--reference", metavar="FILE", help="reference image (.exr, .npy, .png) of the compared size "
+                   "(default: the path tracer at --reference-spp, cached under ~/.cache/restir or $RESTIR_CACHE)")
+    c.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
+    budget = c.add_mutually_exclusive_group()
+    budget.add_argument("--equal-time", type=float, metavar="SECONDS",
+                        help="every method renders frames for this wall time (compilation excluded)")
+    budget.add_argument("--equal-spp", type=int, metavar="N", help="every method renders N samples per pixel")
+    c.add_argument("--frames", type=int, default=16, help="frames per method when no budget is given")
+    c.add_argument("--warmup", type=int, default=4, help="frames before the per-frame error is measured")
+    c.add_argument("--seed", type=int, default=0, help="random seed")
+    c.add_argument("--width", type=int, help="image width (default: the scene's)")
+    c.add_argument("--height", type=int, help="image height (default: the scene's)")
+    c.add_argument("--max-depth", type=int, help="max_depth of every method and the reference (default: the "
+                   "scene's; 2 when restir-di is compared)")
+    c.add_argument("-D", dest="defines", action="append", type=_key_value, default=[], metavar="NAME=VALUE",
+                   help="override a scene <default> (as Mitsuba's -D)")
+    c.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
+    c.add_argument("--report", metavar="DIR", help="write the HTML report (opens offline) into this folder")
+    c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
+    c.add_argument("--quiet", action="store_true", help="no progress display")
     return ap
 
 
@@ -334,6 +360,62 @@ def _validate(args) -> int:
     return {"pass": 0, "fail": 1, "inconclusive": 3}[result.verdict]
 
 
+def _compare(args) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.progress import BarColumn, Progress, TimeElapsedColumn
+    from rich.table import Table
+
+    from .compare import MethodSpec, compare
+
+    console = Console(stderr=True, quiet=args.quiet)
+    specs = [MethodSpec.parse(m) for m in args.methods]  # bad methods and settings: refused before any work
+    if not specs:
+        raise ConfigError("give at least one --method")
+    if args.json:
+        check_output(args.json, "--json", (".json",))
+    if args.report:
+        check_output_folder(args.report, "--report")
+    scene = _load_scene(args.scene, args.defines,
+                        lambda m: console.print(f"[yellow]warning:[/] {escape(m)}", highlight=False, soft_wrap=True))
+    with Progress("[progress.description]{task.description}", BarColumn(), "{task.percentage:>3.0f}%",
+                  TimeElapsedColumn(), console=console, transient=True) as bar:
+        tasks = {}
+
+        def progress(label, fraction):
+            if label not in tasks:
+                tasks[label] = bar.add_task(label, total=1.0)
+            bar.update(tasks[label], completed=fraction)
+
+        result = compare(scene, specs, reference=args.reference, reference_spp=args.reference_spp,
+                         equal_time=args.equal_time, equal_spp=args.equal_spp, frames=args.frames,
+                         warmup=args.warmup, seed=args.seed, width=args.width, height=args.height,
+                         max_depth=args.max_depth, device=args.device, progress=progress)
+    for note in result.notes:
+        console.print(f"note: {escape(note)}", highlight=False, soft_wrap=True)
+    table = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "
+                        f"{result.reference.source}")
+    for col in ("method", "frames", "ms/frame", "relMSE per frame", "relMSE accumulated", "MAPE", "FLIP",
+                "mean ratio (z)"):
+        table.add_column(col, justify="left" if col == "method" else "right")
+    for m in result.methods:
+        x = m.metrics
+        z = f" ({x['mean_z']:+.2f})" if x["mean_z"] is not None else ""
+        table.add_row(escape(m.label), str(m.frames), f"{x['ms_per_frame']:.1f}", f"{x['relmse_frame']:.4g}",
+                      f"{x['relmse_accumulated']:.4g}", f"{x['mape']:.4g}",
+                      "-" if x["flip"] is None else f"{x['flip']:.4f}", f"{x['mean_ratio']:.4f}{z}")
+    Console(width=None if sys.stdout.isatty() else 200).print(table)
+    if args.json:
+        _write(args.json, _write_json, result.to_dict())
+        console.print(f"wrote {escape(args.json)}", highlight=False)
+    if args.report:
+        from .compare.report import write_report
+
+        index = write_report(result, args.report)
+        console.print(f"wrote the report: {escape(index)}", highlight=False, soft_wrap=True)
+    return 0
+
+
 def _info() -> int:
     from . import __version__
     from .integrators import METHODS
@@ -359,6 +441,8 @@ def main(argv=None) -> int:
             return _render(args)
         if args.command == "validate":
             return _validate(args)
+        if args.command == "compare":
+            return _compare(args)
         if args.command == "info":
             return _info()
     except (SceneError, ConfigError) as e:

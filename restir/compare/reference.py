@@ -1,0 +1,85 @@
+"""The reference of a comparison: a given EXR, or the path tracer at N spp, cached on disk.
+
+The cache key is a hash of the scene's content (every triangle, material, texture, the camera
+and the environment, as loaded: an edited XML or mesh gives a new key), the render settings and
+the package version, so that a stale reference is never reused. Cache folder: $RESTIR_CACHE or
+~/.cache/restir, subfolder references/.
+"""
+import dataclasses
+import hashlib
+import json
+import os
+
+import numpy as np
+
+from .. import __version__
+from ..config import ConfigError, RenderConfig
+
+REFERENCE_FRAMES = 16  # the path tracer's reference in this many independent frames (its variance)
+
+
+@dataclasses.dataclass
+class Reference:
+    image: np.ndarray                 # (H, W, 3) float64
+    source: str                       # "file PATH" or "pt N spp (cached KEY)"
+    blocks: np.ndarray | None = None  # (B, H, W, 3) independent estimates (path tracer's frames), None: exact
+
+
+def scene_digest(scene) -> str:
+    """sha256 of everything the scene's image depends on."""
+    h = hashlib.sha256()
+    for f in dataclasses.fields(scene):
+        value = getattr(scene, f.name)
+        h.update(f.name.encode())
+        items = value if isinstance(value, list) else [value]
+        for item in items:
+            if isinstance(item, np.ndarray):
+                h.update(str((item.dtype, item.shape)).encode())
+                h.update(np.ascontiguousarray(item).tobytes())
+            else:
+                h.update(repr(item).encode())
+    return h.hexdigest()
+
+
+def cache_folder() -> str:
+    root = os.environ.get("RESTIR_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "restir")
+    return os.path.join(root, "references")
+
+
+def load_reference_file(path: str, width: int, height: int) -> Reference:
+    from ..image_io import read_image
+
+    if not os.path.isfile(path):
+        raise ConfigError(f"--reference {path}: no such file")
+    image = np.asarray(read_image(path), np.float64)[..., :3]
+    if image.shape[:2] != (height, width):
+        raise ConfigError(f"--reference {path}: {image.shape[1]}x{image.shape[0]} pixels, the comparison renders "
+                          f"{width}x{height} (set --width/--height to the reference's size)")
+    return Reference(image, f"file {path}")
+
+
+def path_traced_reference(scene, spp: int, config: RenderConfig, progress=None) -> Reference:
+    """The path tracer at `spp` samples per pixel in REFERENCE_FRAMES independent frames, loaded
+    from the cache when present."""
+    from ..api import render
+
+    frames = REFERENCE_FRAMES if spp >= REFERENCE_FRAMES else max(2, spp)
+    per_frame = max(1, spp // frames)
+    cfg = RenderConfig(method="pt", spp=per_frame, frames=frames, width=config.width, height=config.height,
+                       max_depth=config.max_depth, seed=0x5EF, device=config.device, keep_frames=True)
+    key_text = json.dumps({"scene": scene_digest(scene), "spp": per_frame, "frames": frames, "width": config.width,
+                           "height": config.height, "max_depth": config.max_depth, "seed": cfg.seed,
+                           "version": __version__}, sort_keys=True)
+    key = hashlib.sha256(key_text.encode()).hexdigest()[:24]
+    path = os.path.join(cache_folder(), key + ".npz")
+    source = f"pt {per_frame * frames} spp ({frames} frames; cache {path})"
+    if os.path.isfile(path):
+        with np.load(path) as data:
+            return Reference(data["image"], source, data["blocks"])
+    result = render(scene, cfg, progress=progress)
+    blocks = result.frame_images.astype(np.float32)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path + f".{os.getpid()}.tmp.npz"
+    np.savez_compressed(tmp, image=result.image.astype(np.float64), blocks=blocks, key=key_text)
+    os.replace(tmp, path)  # atomic: a concurrent or interrupted run never leaves half a file
+    return Reference(result.image.astype(np.float64), source, blocks)

@@ -1,0 +1,197 @@
+"""`restir compare`: budgets, metrics against an independent computation from the written EXRs,
+the reference cache, input errors before any work, and the HTML report operated in a real browser
+(Debian's chromium through Selenium; `make test` installs both)."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import restir
+from restir.compare import MethodSpec, compare
+from restir.compare.runner import _Blocks
+from restir.config import ConfigError
+from restir.image_io import read_exr
+
+ARTIFACTS = os.path.join("out", "artifacts")
+
+
+@pytest.fixture(scope="module")
+def comparison(tmp_path_factory):
+    """pt at 2 spp per frame and restir-di with 8 neighbours, 16 samples per pixel each, on the
+    Cornell box at 32x32 against a 64-spp path-traced reference (cached in a temporary folder)."""
+    cache = tmp_path_factory.mktemp("cache")
+    os.environ["RESTIR_CACHE"] = str(cache)
+    try:
+        scene = restir.load_scene("builtin:cornell-box")
+        result = compare(scene, ["pt:spp=2", "restir-di:spatial.neighbors=8"], reference_spp=64, equal_spp=16,
+                         warmup=2, width=32, height=32)
+    finally:
+        del os.environ["RESTIR_CACHE"]
+    return result, cache
+
+
+def test_equal_samples_budget(comparison):
+    result, _ = comparison
+    pt, di = result.methods
+    assert (pt.spp, pt.frames) == (2, 8) and (di.spp, di.frames) == (1, 16)
+    assert result.notes and "max_depth 2" in result.notes[0]  # restir-di computes depth 2: all compared there
+    assert pt.stats["max_depth"] == di.stats["max_depth"] == 2
+    assert pt.metrics["frames_after_warmup"] == 6 and di.metrics["frames_after_warmup"] == 14
+    assert np.all(np.diff(pt.frame_seconds) > 0)
+    for m in result.methods:  # both unbiased: within the image test's threshold (t, 7 and 15 df: about 6)
+        assert abs(m.metrics["mean_z"]) < 5.0 and m.metrics["mean_mdb"] > 0, m.metrics
+
+
+def test_metrics_match_the_written_images(comparison, tmp_path):
+    """The report's numbers, recomputed from its EXRs with numpy and flip_evaluator directly."""
+    import flip_evaluator
+
+    from restir.compare.report import write_report
+
+    result, _ = comparison
+    write_report(result, str(tmp_path))
+    data = json.load(open(tmp_path / "comparison.json"))
+    ref = read_exr(str(tmp_path / "images" / "0.exr")).astype(np.float64)
+    assert np.allclose(ref, result.reference.image, rtol=1e-6, atol=1e-7)
+    for i, m in enumerate(data["methods"], start=1):
+        img = read_exr(str(tmp_path / "images" / f"{i}.exr")).astype(np.float64)
+        rel = np.mean((img - ref) ** 2 / (ref ** 2 + 0.01))
+        ape = np.mean(np.abs(img - ref) / (np.abs(ref) + 0.01))
+        fl = flip_evaluator.evaluate(np.clip(ref, 0, None).astype(np.float32), np.clip(img, 0, None).astype(np.float32),
+                                     "HDR", applyMagma=False)[1]
+        assert m["metrics"]["relmse_accumulated"] == pytest.approx(rel, rel=1e-5)
+        assert m["metrics"]["mape"] == pytest.approx(ape, rel=1e-5)
+        assert m["metrics"]["flip"] == pytest.approx(fl, rel=1e-4)
+        assert m["metrics"]["mean_ratio"] == pytest.approx(img.mean() / ref.mean(), rel=2e-2)
+        assert m["accumulated_relmse"][-1] == m["metrics"]["relmse_accumulated"]
+        assert len(m["frame_relmse"]) == m["frames"] and len(m["frame_seconds"]) == m["frames"]
+
+
+def test_reference_is_cached(comparison, monkeypatch):
+    """A second comparison with the same scene and settings loads the reference from the cache
+    (no path-tracer render), and a changed scene gets a new key."""
+    import restir.api
+
+    result, cache = comparison
+    files = list((cache / "references").iterdir())
+    assert len(files) == 1
+    monkeypatch.setenv("RESTIR_CACHE", str(cache))
+    calls = []
+    real = restir.api.render
+    monkeypatch.setattr(restir.api, "render", lambda *a, **k: calls.append(1) or real(*a, **k))
+    scene = restir.load_scene("builtin:cornell-box")
+    again = compare(scene, ["restir-di"], reference_spp=64, frames=2, width=32, height=32)
+    assert not calls and np.array_equal(again.reference.image, result.reference.image)
+    scene.tri_emission = scene.tri_emission * 2.0
+    compare(scene, ["restir-di"], reference_spp=64, frames=2, width=32, height=32)
+    assert calls and len(list((cache / "references").iterdir())) == 2
+
+
+def test_equal_time_budget(tmp_path, monkeypatch):
+    monkeypatch.setenv("RESTIR_CACHE", str(tmp_path))
+    scene = restir.load_scene("builtin:cornell-box")
+    r = compare(scene, ["pt", "restir-di"], reference_spp=16, equal_time=0.5, width=16, height=16)
+    for m in r.methods:  # frames until the budget is spent, the crossing frame kept
+        assert m.seconds >= 0.5 and m.frame_seconds[-2] < 0.5 and m.frames >= 2
+    assert r.methods[0].frames > r.methods[1].frames  # the path tracer's frames are cheaper
+
+
+def test_blocks_stay_equal_and_bounded():
+    b = _Blocks()
+    for i in range(1000):
+        b.add(np.full((2, 2, 3), float(i)))
+    full = b.full()
+    assert 32 <= len(full) <= 64 and len(b.sums) <= 64
+    n = b.length
+    assert np.allclose(full[:, 0, 0, 0], [np.mean(range(k * n, (k + 1) * n)) for k in range(len(full))])
+
+
+def test_method_specs():
+    s = MethodSpec.parse("restir-di:spatial.neighbors=8, spp=2")
+    assert (s.method, s.settings, s.spp) == ("restir-di", {"spatial.neighbors": "8"}, 2)
+    for bad, msg in (("nope", "unknown method"), ("restir-di:no.such=1", "unknown setting"),
+                     ("restir-di:candidates", "not key=value"), ("pt:spp=0", "spp must be"),
+                     ("restir-di:candidates=x", "candidates")):
+        with pytest.raises(ConfigError, match=msg):
+            MethodSpec.parse(bad)
+
+
+def test_cli_refuses_bad_input_before_work(tmp_path):
+    """Errors in one line, exit 2, nothing rendered (no reference in the cache afterwards)."""
+    env = {**os.environ, "RESTIR_CACHE": str(tmp_path / "cache")}
+    cases = [
+        (["--method", "pt", "--method", "restir-di:bogus=1"], "unknown setting 'bogus'"),
+        (["--method", "pt", "--json", str(tmp_path / "x.txt")], "--json"),
+        (["--method", "pt", "--equal-time", "1", "--equal-spp", "4"], "not allowed with"),
+        (["--method", "pt", "--reference", str(tmp_path / "missing.exr")], "no such file"),
+        ([], "at least one --method"),
+    ]
+    for extra, msg in cases:
+        p = subprocess.run([sys.executable, "-m", "restir", "compare", "builtin:cornell-box", "--width", "8",
+                            "--height", "8", *extra], capture_output=True, text=True, env=env, timeout=120)
+        assert p.returncode == 2 and msg in p.stderr, (extra, p.stderr)
+    assert not (tmp_path / "cache").exists()
+
+
+def _chromium():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,1100",
+              "--allow-file-access-from-files"):
+        opts.add_argument(a)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    return webdriver.Chrome(options=opts, service=Service(shutil.which("chromedriver") or "/usr/bin/chromedriver"))
+
+
+def test_report_in_a_browser(comparison, tmp_path):
+    """Open the report in chromium: every image decoded and finite, every plot drawn, a number key
+    switches the image shown (and the canvas changes), the wheel zooms (the view and the canvas
+    change), no console errors; a screenshot is kept in out/artifacts/."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    from restir.compare.report import write_report
+
+    result, _ = comparison
+    index = write_report(result, str(tmp_path / "report"))
+    driver = _chromium()
+    try:
+        driver.get("file://" + os.path.abspath(index))
+        WebDriverWait(driver, 30).until(lambda d: d.execute_script("return document.body.dataset.ready === '1'"))
+        n = driver.execute_script("return IMAGES.length")
+        assert n == 1 + len(result.methods)
+        stats = driver.execute_script("return IMAGES.map(im => [im.rgb.length, im.rgb.every(Number.isFinite), "
+                                      "im.rgb.reduce((a, b) => a + b, 0) / im.rgb.length])")
+        for (length, finite, mean), img in zip(stats, [result.reference.image] + [m.image for m in result.methods]):
+            assert length == img.size and finite and mean == pytest.approx(float(np.mean(img)), rel=2e-3)
+        assert driver.execute_script("return document.querySelectorAll('.js-plotly-plot .main-svg').length") >= 5
+        main = driver.find_element(By.ID, "main")
+        pixels = lambda: driver.execute_script("return document.getElementById('main').toDataURL()")  # noqa: E731
+        before = pixels()
+        ActionChains(driver).send_keys("0").perform()
+        assert driver.execute_script("return restirView.index") == 0
+        assert driver.find_element(By.ID, "shown").text == "reference"
+        assert pixels() != before
+        ActionChains(driver).send_keys("2").perform()
+        assert driver.execute_script("return restirView.index") == 2
+        shown = pixels()
+        ActionChains(driver).scroll_from_origin(ScrollOrigin.from_element(main), 0, -300).perform()
+        WebDriverWait(driver, 5).until(lambda d: d.execute_script("return restirView.scale") > 1.0)
+        assert pixels() != shown
+        ActionChains(driver).send_keys("e").perform()
+        assert driver.execute_script("return restirView.error") is True
+        os.makedirs(ARTIFACTS, exist_ok=True)
+        driver.save_screenshot(os.path.join(ARTIFACTS, "compare_report.png"))
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        assert not errors, errors
+    finally:
+        driver.quit()
