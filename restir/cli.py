@@ -112,8 +112,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("info", help="list the methods with their settings (defaults, meanings) and the builtin scenes")
     v = sub.add_parser("validate", formatter_class=_Formatter, epilog=_builtins_epilog(),
                        help="test a method for bias against the path tracer (independent runs, z-tests)")
-    v.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
+    v.add_argument("scene", nargs="?", help="Mitsuba 3 XML file or builtin:NAME (listed below); not needed when "
+                   "--images are tested against --reference images")
     v.add_argument("--method", default="restir-di", help="the method tested")
+    v.add_argument("--images", metavar="GLOB", help="test these images instead of rendering: K >= 2 independent runs "
+                   "of any renderer (quote the pattern, e.g. 'runs/*.exr'), against --reference, or against the "
+                   "path tracer rendered here on SCENE (--ref-runs runs of --frames x --ref-spp at the images' size)")
+    v.add_argument("--reference", metavar="GLOB", help="with --images: K' >= 2 independent reference runs, or one "
+                   "converged image (taken as exact unless --reference-variance is given)")
+    v.add_argument("--reference-variance", metavar="FILE", help="with one --reference image: the per-pixel variance "
+                   "of its mean, an image of the same size")
     v.add_argument("--runs", type=int, default=32, help="independent runs K (fresh seed and history each)")
     v.add_argument("--frames", type=int, default=8, help="frames T per run; a run's statistic is its average")
     v.add_argument("--spp", type=int, default=1, help="samples per pixel per frame of the tested method")
@@ -322,10 +330,89 @@ def _render(args) -> int:
     return 130 if interrupted else 0
 
 
+def _glob_images(pattern: str, option: str) -> list:
+    import glob
+
+    from .image_io import read_image
+
+    paths = sorted(glob.glob(os.path.expanduser(pattern)))
+    if not paths:
+        raise ConfigError(f"{option} {pattern}: no file matches")
+    images = []
+    for p in paths:
+        try:
+            images.append(read_image(p))
+        except Exception as e:  # unreadable or not an image: name the file
+            raise ConfigError(f"{option}: cannot read {p}: {e}") from None
+    return images
+
+
+def _print_validation(result, max_mdb) -> None:
+    for channel, rep in zip("RGB", result.report.reports):
+        print(f"{channel}: {rep}")
+    print(f"minimum detectable bias (image level, 80% power): {100 * result.report.mdb:.2f}% "
+          f"(a pass needs at most {100 * max_mdb:.3g}%, --max-mdb)")
+
+
+def _validate_images(args) -> int:
+    from .image_io import write_image
+    from .validation import validate_images
+
+    if args.zmap:
+        check_output(args.zmap, "--zmap", tuple(IMAGE_FORMATS))
+    if args.reference_variance and not args.reference:
+        raise ConfigError("--reference-variance needs --reference")
+    images = _glob_images(args.images, "--images")
+    if len(images) < 2:
+        raise ConfigError(f"--images {args.images}: {len(images)} file; at least 2 independent runs are needed")
+    if args.reference:
+        refs = _glob_images(args.reference, "--reference")
+        if len(refs) >= 2:
+            if args.reference_variance:
+                raise ConfigError("--reference-variance goes with one converged --reference image, not several runs")
+            what = f"{len(refs)} reference runs"
+            result = validate_images(images, reference_images=refs, max_mdb=args.max_mdb)
+        else:
+            var = 0.0
+            if args.reference_variance:
+                var = _glob_images(args.reference_variance, "--reference-variance")[0][..., :3]
+            what = "one converged reference" + (" with its variance" if args.reference_variance else " (taken as exact)")
+            result = validate_images(images, reference=refs[0], reference_var=var, max_mdb=args.max_mdb)
+    else:
+        if not args.scene:
+            raise ConfigError("--images needs --reference images or a SCENE to render the path tracer on")
+        from .validation import IndependentRuns
+
+        h, w = images[0].shape[:2]
+        scene = _load_scene(args.scene, args.defines, lambda m: print(f"warning: {m}", file=sys.stderr))
+        ref_cfg = RenderConfig(method="pt", spp=args.ref_spp, frames=args.frames, width=w, height=h,
+                               max_depth=args.max_depth, device=args.device)
+        runs = args.ref_runs or len(images)
+        what = f"the path tracer here, {runs} runs x {args.frames} frames x {args.ref_spp} spp"
+        print(f"rendering the reference: {what}", file=sys.stderr)
+        ref = IndependentRuns(scene, ref_cfg, runs, seed0=900_000)
+        result = validate_images(images, reference_images=list(ref.batches), max_mdb=args.max_mdb)
+    print(f"validating {len(images)} images ({images[0].shape[1]}x{images[0].shape[0]}) against {what}",
+          file=sys.stderr)
+    _print_validation(result, args.max_mdb)
+    print(f"verdict: {result.verdict}" + (f" ({result.reason})" if result.verdict == "inconclusive" else ""))
+    if args.zmap:
+        _write(args.zmap, write_image, result.zmap())
+        print(f"wrote {args.zmap}")
+    return {"pass": 0, "fail": 1, "inconclusive": 3}[result.verdict]
+
+
 def _validate(args) -> int:
     from .image_io import write_image
     from .integrators import METHODS
     from .validation import validate
+
+    if args.images:
+        return _validate_images(args)
+    if args.reference or args.reference_variance:
+        raise ConfigError("--reference and --reference-variance go with --images")
+    if not args.scene:
+        raise ConfigError("give a SCENE to render, or --images to test")
 
     for option, n in (("--runs", args.runs), ("--ref-runs", args.ref_runs)):
         if n is not None and n < 2:
@@ -347,10 +434,7 @@ def _validate(args) -> int:
     print(f"validating {args.method} against pt on {args.scene}: {args.runs} runs x {args.frames} frames, "
           f"{args.width}x{args.height}, max_depth {depth if depth is not None else scene.max_depth}", file=sys.stderr)
     result = validate(scene, tested, args.runs, reference, args.ref_runs, max_mdb=args.max_mdb)
-    for channel, rep in zip("RGB", result.report.reports):
-        print(f"{channel}: {rep}")
-    print(f"minimum detectable bias (image level, 80% power): {100 * result.report.mdb:.2f}% "
-          f"(a pass needs at most {100 * args.max_mdb:.3g}%, --max-mdb)")
+    _print_validation(result, args.max_mdb)
     if result.tested.counters:
         print("counters over all runs: " + ", ".join(f"{k} {v}" for k, v in sorted(result.tested.counters.items())))
     print(f"verdict: {result.verdict}" + (f" ({result.reason})" if result.verdict == "inconclusive" else ""))

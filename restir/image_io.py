@@ -39,9 +39,12 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
 
 
 def read_image(path: str, linearize_srgb: bool = True) -> np.ndarray:
-    """Any EXR, or an 8-bit image (sRGB-decoded unless linearize_srgb is False), as float RGB."""
+    """Any EXR, a .npy array (linear, H x W x 3), or an 8-bit image (sRGB-decoded unless
+    linearize_srgb is False), as float RGB."""
     if path.lower().endswith(".exr"):
         return read_exr(path)
+    if path.lower().endswith(".npy"):
+        return np.asarray(np.load(path), np.float32)
     from PIL import Image
 
     img = np.asarray(Image.open(path).convert("RGB"), np.float32) / 255.0

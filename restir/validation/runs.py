@@ -16,13 +16,46 @@ from .check import compare
 from .stats import RGBZTest
 
 
-class IndependentRuns:
-    """K runs of `config` (seeds seed0, seed0+1, ...); per-pixel moments over runs in float64.
+class ImageBatches:
+    """K independent estimates of one image (K runs of a renderer, this one's or any other's);
+    per-pixel moments over them in float64.
 
-    Exposes `image` (mean over runs), `batch_variance_of_mean` (variance of that mean),
-    `batch_skewness`, `batch_excess_kurtosis` and `frames` (= runs, for degrees of freedom),
-    the interface the z-tests read, and `counters`: the renders' event counters summed over
-    runs (non-finite values, zero-weight candidates, failed shifts).
+    Exposes `image` (mean over the estimates), `batch_variance_of_mean` (variance of that mean),
+    `batch_skewness`, `batch_excess_kurtosis`, `frames` (= K, for degrees of freedom) and
+    `batches` (K, H, W, 3): the interface the z-tests read.
+    """
+
+    def __init__(self, images):
+        images = [np.asarray(x, np.float64)[..., :3] for x in images]
+        runs = len(images)
+        if runs < 2:
+            from ..config import ConfigError
+
+            raise ConfigError("at least 2 independent runs are needed")
+        shapes = {x.shape for x in images}
+        if len(shapes) != 1:
+            from ..config import ConfigError
+
+            raise ConfigError(f"the images differ in size: {', '.join(sorted(str(s[1]) + 'x' + str(s[0]) for s in shapes))}")
+        sums = np.zeros((4,) + images[0].shape)
+        for x in images:
+            sums += (x, x ** 2, x ** 3, x ** 4)
+        s1, s2, s3, s4 = (v / runs for v in sums)
+        var = np.maximum(s2 - s1 * s1, 0.0)
+        self.frames = runs
+        self.batches = np.stack(images).astype(np.float32)  # (K, H, W, 3): one independent estimate per run
+        self.image = s1
+        self.batch_variance_of_mean = var * runs / (runs - 1) / runs
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.batch_skewness = np.where(var > 0, (s3 - 3 * s1 * s2 + 2 * s1 ** 3) / var ** 1.5, 0.0)
+            m4 = s4 - 4 * s1 * s3 + 6 * s1 * s1 * s2 - 3 * s1 ** 4
+            self.batch_excess_kurtosis = np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
+
+
+class IndependentRuns(ImageBatches):
+    """K runs of `config` (seeds seed0, seed0+1, ...), each run's statistic its average image
+    (see ImageBatches), and `counters`: the renders' event counters summed over runs (non-finite
+    values, zero-weight candidates, failed shifts).
 
     The harness tests the unbiased build only: a render whose `debug.mutation` setting is not
     "none" (fault injection) is refused unless `allow_mutation` is set (the power checks).
@@ -37,7 +70,6 @@ class IndependentRuns:
         if mutation != "none" and not allow_mutation:
             raise AssertionError(f"debug.mutation={mutation} is a biased fault injection; the harness tests "
                                  "the unbiased build only")
-        sums = None
         self.stats = []
         self.counters: dict[str, int] = {}
         images = []
@@ -50,21 +82,8 @@ class IndependentRuns:
                 if name.startswith("nonfinite") and n:
                     raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable (TESTING.md 5.1)")
                 self.counters[name] = self.counters.get(name, 0) + n
-            x = r.image.astype(np.float64)
             images.append(r.image)
-            if sums is None:
-                sums = np.zeros((4,) + x.shape)
-            sums += (x, x ** 2, x ** 3, x ** 4)
-        s1, s2, s3, s4 = (v / runs for v in sums)
-        var = np.maximum(s2 - s1 * s1, 0.0)
-        self.frames = runs
-        self.batches = np.stack(images)  # (K, H, W, 3): one independent estimate per run
-        self.image = s1
-        self.batch_variance_of_mean = var * runs / (runs - 1) / runs
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.batch_skewness = np.where(var > 0, (s3 - 3 * s1 * s2 + 2 * s1 ** 3) / var ** 1.5, 0.0)
-            m4 = s4 - 4 * s1 * s3 + 6 * s1 * s1 * s2 - 3 * s1 ** 4
-            self.batch_excess_kurtosis = np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
+        super().__init__(images)
 
 
 DEFAULT_MAX_MDB = 0.05  # a pass must rule out relative biases above 5% (restir validate --max-mdb)
@@ -73,8 +92,8 @@ DEFAULT_MAX_MDB = 0.05  # a pass must rule out relative biases above 5% (restir 
 @dataclass
 class Validation:
     report: RGBZTest
-    tested: IndependentRuns
-    reference: IndependentRuns
+    tested: ImageBatches
+    reference: ImageBatches | None  # None: an exact (converged) reference
     max_mdb: float = DEFAULT_MAX_MDB  # the largest minimum detectable bias a pass may have (a fraction)
 
     @property
@@ -125,3 +144,29 @@ def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, re
     ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000)
     rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
     return Validation(rep, tested, ref, max_mdb)
+
+
+def validate_images(images, reference_images=None, reference=None, reference_var=0.0, tile: int = 8,
+                    alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB) -> Validation:
+    """The harness on images made by any renderer: `images`, K >= 2 independent runs of the
+    tested renderer (each its own average image), against either `reference_images` (K' >= 2
+    independent runs of the reference) or `reference`, one converged image, with the per-pixel
+    variance of its mean in `reference_var` (0: taken as exact)."""
+    tested = ImageBatches(images)
+    if reference_images is not None:
+        ref = ImageBatches(reference_images)
+        if ref.image.shape != tested.image.shape:
+            from ..config import ConfigError
+
+            raise ConfigError(f"the reference images are {ref.image.shape[1]}x{ref.image.shape[0]}, the tested "
+                              f"{tested.image.shape[1]}x{tested.image.shape[0]}")
+        rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
+        return Validation(rep, tested, ref, max_mdb)
+    ref_image = np.asarray(reference, np.float64)[..., :3]
+    if ref_image.shape != tested.image.shape:
+        from ..config import ConfigError
+
+        raise ConfigError(f"the reference is {ref_image.shape[1]}x{ref_image.shape[0]}, the tested images "
+                          f"{tested.image.shape[1]}x{tested.image.shape[0]}")
+    rep = compare(tested, ref_image, reference_var, tile=tile, alpha=alpha)
+    return Validation(rep, tested, None, max_mdb)
