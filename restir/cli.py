@@ -14,6 +14,7 @@ import textwrap
 import warnings
 
 from .config import ConfigError, RenderConfig
+from .fanout import default_workers
 from .image_io import IMAGE_FORMATS, LDR_FORMATS
 from .scene.builtin import BUILTIN_DESCRIPTIONS, BUILTINS
 from .scene.errors import SceneError, SceneWarning
@@ -144,6 +145,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "diagonals per frame")
     v.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
     v.add_argument("--zmap", metavar="FILE", help="write the per-pixel z map here (.png, .exr, .npy)")
+    _fanout_options(v, default_workers=None, what="the independent runs")
     c = sub.add_parser("compare", formatter_class=_Formatter, epilog=_builtins_epilog(),
                        help="compare methods at equal time or equal samples against a reference (metrics, report)")
     c.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
@@ -170,7 +172,41 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--report", metavar="DIR", help="write the HTML report (opens offline) into this folder")
     c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
+    _fanout_options(c, default_workers=1, what="the methods (equal samples or frames only)")
+
+    s = sub.add_parser("sweep", formatter_class=_Formatter, epilog=_builtins_epilog(),
+                       help="one method over a grid of settings and seeds, fanned out locally or on Ray")
+    s.add_argument("scene", help="Mitsuba 3 XML file or builtin:NAME (listed below)")
+    s.add_argument("--method", required=True, help="the method swept (restir info lists its settings)")
+    s.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
+                   help="a setting and its values (spp: samples per pixel per frame); repeat for more axes: "
+                        "every combination is rendered")
+    s.add_argument("--seeds", type=int, default=1, help="seeds per grid point (0 .. N-1)")
+    s.add_argument("--frames", type=int, default=16, help="frames per render")
+    s.add_argument("--spp", type=int, default=1, help="samples per pixel per frame (unless on the grid)")
+    s.add_argument("--warmup", type=int, default=4, help="frames before the per-frame error is measured")
+    s.add_argument("--reference", metavar="FILE", help="reference image (default: the path tracer at "
+                   "--reference-spp, cached)")
+    s.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
+    s.add_argument("--width", type=int, help="image width (default: the scene's)")
+    s.add_argument("--height", type=int, help="image height (default: the scene's)")
+    s.add_argument("--max-depth", type=int, help="max_depth (default: the scene's)")
+    s.add_argument("-D", dest="defines", action="append", type=_key_value, default=[], metavar="NAME=VALUE",
+                   help="override a scene <default> (as Mitsuba's -D)")
+    s.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
+    s.add_argument("--out", default="out/sweep", metavar="DIR", help="writes DIR/sweep.json, DIR/sweep.csv and "
+                   "the report DIR/report/index.html")
+    s.add_argument("--quiet", action="store_true", help="no progress display")
+    _fanout_options(s, default_workers=None, what="the renders")
     return ap
+
+
+def _fanout_options(p, default_workers, what):
+    p.add_argument("--workers", type=int, default=default_workers,
+                   help=f"local processes rendering {what} (default: "
+                        f"{'one per core' if default_workers is None else default_workers})")
+    p.add_argument("--ray", metavar="ADDRESS", help=f"render {what} on a Ray cluster: auto (the running one), an "
+                   "address (ray://host:10001), or local (a private one on this machine); needs restir[ray]")
 
 
 # ------------------------------------------------------------------ output paths, checked first
@@ -390,7 +426,8 @@ def _validate_images(args) -> int:
         runs = args.ref_runs or len(images)
         what = f"the path tracer here, {runs} runs x {args.frames} frames x {args.ref_spp} spp"
         print(f"rendering the reference: {what}", file=sys.stderr)
-        ref = IndependentRuns(scene, ref_cfg, runs, seed0=900_000)
+        ref = IndependentRuns(scene, ref_cfg, runs, seed0=900_000, workers=args.workers or default_workers(),
+                              ray=args.ray)
         result = validate_images(images, reference_images=list(ref.batches), max_mdb=args.max_mdb)
     print(f"validating {len(images)} images ({images[0].shape[1]}x{images[0].shape[0]}) against {what}",
           file=sys.stderr)
@@ -433,7 +470,8 @@ def _validate(args) -> int:
     reference = RenderConfig(method="pt", spp=args.ref_spp, max_depth=depth, **common)
     print(f"validating {args.method} against pt on {args.scene}: {args.runs} runs x {args.frames} frames, "
           f"{args.width}x{args.height}, max_depth {depth if depth is not None else scene.max_depth}", file=sys.stderr)
-    result = validate(scene, tested, args.runs, reference, args.ref_runs, max_mdb=args.max_mdb)
+    result = validate(scene, tested, args.runs, reference, args.ref_runs, max_mdb=args.max_mdb,
+                      workers=args.workers or default_workers(), ray=args.ray)
     _print_validation(result, args.max_mdb)
     if result.tested.counters:
         print("counters over all runs: " + ", ".join(f"{k} {v}" for k, v in sorted(result.tested.counters.items())))
@@ -474,7 +512,8 @@ def _compare(args) -> int:
         result = compare(scene, specs, reference=args.reference, reference_spp=args.reference_spp,
                          equal_time=args.equal_time, equal_spp=args.equal_spp, frames=args.frames,
                          warmup=args.warmup, seed=args.seed, width=args.width, height=args.height,
-                         max_depth=args.max_depth, device=args.device, progress=progress)
+                         max_depth=args.max_depth, device=args.device, progress=progress,
+                         workers=args.workers, ray=args.ray)
     for note in result.notes:
         console.print(f"note: {escape(note)}", highlight=False, soft_wrap=True)
     table = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "
@@ -497,6 +536,40 @@ def _compare(args) -> int:
 
         index = write_report(result, args.report)
         console.print(f"wrote the report: {escape(index)}", highlight=False, soft_wrap=True)
+    return 0
+
+
+def _sweep(args) -> int:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+    from rich.table import Table
+
+    from .compare.sweep import parse_grid, sweep, write_sweep
+
+    console = Console(stderr=True, quiet=args.quiet)
+    points = parse_grid(args.grid, args.method)  # unknown settings and bad values: before any work
+    check_output_folder(args.out, "--out")
+    scene = _load_scene(args.scene, args.defines,
+                        lambda m: console.print(f"[yellow]warning:[/] {escape(m)}", highlight=False, soft_wrap=True))
+    with Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), console=console, transient=True) as bar:
+        task = bar.add_task("renders", total=len(points) * max(args.seeds, 1))
+        result = sweep(scene, args.method, points, seeds=args.seeds, frames=args.frames, spp=args.spp,
+                       warmup=args.warmup, reference=args.reference, reference_spp=args.reference_spp,
+                       width=args.width, height=args.height, max_depth=args.max_depth, device=args.device,
+                       workers=args.workers, ray=args.ray,
+                       progress=lambda done, total: bar.update(task, completed=done))
+    table = Table(title=f"{args.method} on {result.comparison.scene}: {result.comparison.budget}")
+    for col in ("grid point", "relMSE per frame", "relMSE accumulated", "MAPE", "ms/frame"):
+        table.add_column(col, justify="left" if col == "grid point" else "right")
+    for e in result.summary:
+        pm = lambda k: f"{e[k]:.4g} ± {e[k + '_std']:.2g}" if e["seeds"] > 1 else f"{e[k]:.4g}"  # noqa: E731
+        table.add_row(escape(e["point"]), pm("relmse_frame"), pm("relmse_accumulated"), pm("mape"), pm("ms_per_frame"))
+    Console(width=None if sys.stdout.isatty() else 200).print(table)
+    index = write_sweep(result, args.out)
+    console.print(f"wrote {escape(os.path.join(args.out, 'sweep.json'))}, sweep.csv and the report {escape(index)}",
+                  highlight=False, soft_wrap=True)
     return 0
 
 
@@ -525,6 +598,8 @@ def main(argv=None) -> int:
             return _render(args)
         if args.command == "validate":
             return _validate(args)
+        if args.command == "sweep":
+            return _sweep(args)
         if args.command == "compare":
             return _compare(args)
         if args.command == "info":

@@ -126,6 +126,46 @@ class _Blocks:
         return np.stack(keep) if keep else np.zeros((0,))
 
 
+class FrameStats:
+    """A run's frames summarized as they arrive, in memory independent of their number: the running
+    sum, each frame's relMSE and the accumulated image's after it, the batch means (`_Blocks`),
+    the last frame."""
+
+    def __init__(self, reference: Reference):
+        self.ref = reference.image
+        self.total = np.zeros(self.ref.shape)
+        self.blocks = _Blocks()
+        self.frame_err, self.acc_err = [], []
+        self.count = 0
+        self.last = None
+
+    def add(self, frame):
+        x = np.asarray(frame, np.float64)
+        self.count += 1
+        self.total += x
+        self.blocks.add(x)
+        self.frame_err.append(metrics.relmse(x, self.ref))
+        self.acc_err.append(metrics.relmse(self.total / self.count, self.ref))
+        self.last = x
+        return self
+
+
+def measure(label, config: RenderConfig, frames: FrameStats, frame_seconds, reference: Reference, warmup: int,
+            stats: dict) -> MethodResult:
+    """A MethodResult from a run's frames and their cumulative times, with the metrics of `compare`."""
+    ref = reference.image
+    n = frames.count
+    image = frames.total / n
+    after = frames.frame_err[warmup:] if n > warmup else frames.frame_err[-1:]
+    ratio, z, mdb = metrics.mean_bias(frames.blocks.full(), ref, reference.blocks)
+    seconds = frame_seconds[-1]
+    m = {"relmse_frame": float(np.mean(after)), "relmse_accumulated": frames.acc_err[-1],
+         "mape": metrics.mape(image, ref), "flip": metrics.flip(image, ref), "mean_ratio": ratio, "mean_z": z,
+         "mean_mdb": mdb, "frames_after_warmup": len(after), "ms_per_frame": 1e3 * seconds / n}
+    return MethodResult(label, config.method, dict(config.settings), config.spp, n, seconds, image.astype(np.float32),
+                        list(frame_seconds), frames.frame_err, frames.acc_err, m, stats, frames.last.astype(np.float32))
+
+
 def _compile_first(scene, config: RenderConfig):
     """Load (compile if needed) the method's kernels on a 16x16 render, so that no budget is spent
     compiling."""
@@ -143,39 +183,47 @@ def _run_method(scene, spec: MethodSpec, base: RenderConfig, reference: Referenc
     frames_max = -(-amount // config.spp) if kind == "spp" else amount if kind == "frames" else base.frames
     _compile_first(scene, config)
     integ = make_integrator(sized_scene(scene, config), config)
-    ref = reference.image
-    total = np.zeros(ref.shape)
-    blocks = _Blocks()
-    elapsed, f = 0.0, 0
-    frame_seconds, frame_err, acc_err = [], [], []
-    last = None
-    while f < frames_max and not (kind == "time" and elapsed >= amount):
+    frames, frame_seconds = FrameStats(reference), []
+    elapsed = 0.0
+    while frames.count < frames_max and not (kind == "time" and elapsed >= amount):
         t = time.perf_counter()
-        mean, _ = integ.render_frame(f)
+        mean, _ = integ.render_frame(frames.count)
         elapsed += time.perf_counter() - t
-        last = mean.astype(np.float64)
-        total += last
-        blocks.add(last)
-        f += 1
+        frames.add(mean)
         frame_seconds.append(elapsed)
-        frame_err.append(metrics.relmse(last, ref))
-        acc_err.append(metrics.relmse(total / f, ref))
         if progress:
-            progress(spec.label, min(1.0, elapsed / amount) if kind == "time" else f / frames_max)
-    image = total / f
-    after = frame_err[warmup:] if len(frame_err) > warmup else frame_err[-1:]
-    ratio, z, mdb = metrics.mean_bias(blocks.full(), ref, reference.blocks)
-    m = {"relmse_frame": float(np.mean(after)), "relmse_accumulated": acc_err[-1], "mape": metrics.mape(image, ref),
-         "flip": metrics.flip(image, ref), "mean_ratio": ratio, "mean_z": z, "mean_mdb": mdb,
-         "frames_after_warmup": len(after), "ms_per_frame": 1e3 * elapsed / f}
-    return MethodResult(spec.label, spec.method, spec.settings, config.spp, f, elapsed, image.astype(np.float32),
-                        frame_seconds, frame_err, acc_err, m, integ.stats(), last.astype(np.float32))
+            progress(spec.label, min(1.0, elapsed / amount) if kind == "time" else frames.count / frames_max)
+    return measure(spec.label, config, frames, frame_seconds, reference, warmup, integ.stats())
+
+
+def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progress):
+    """The methods as independent renders (equal samples or frames), measured here."""
+    from ..fanout import run_tasks
+
+    kind, amount = budget
+    configs = []
+    for spec in specs:
+        spp = spec.spp or 1
+        frames = -(-amount // spp) if kind == "spp" else amount
+        configs.append(dataclasses.replace(base, method=spec.method, settings=dict(spec.settings), spp=spp,
+                                           frames=frames, keep_frames=True))
+    renders = run_tasks([(scene, c) for c in configs], workers=workers, ray=ray,
+                        progress=(lambda done, total: progress("methods", done / total)) if progress else None)
+    out = []
+    for spec, cfg, r in zip(specs, configs, renders):
+        fs = FrameStats(reference)
+        for x in r.frame_images:
+            fs.add(x)
+        ms = r.stats["ms_per_frame"]
+        out.append(measure(spec.label, cfg, fs, [ms * 1e-3 * (i + 1) for i in range(fs.count)], reference, warmup,
+                           r.stats))
+    return out
 
 
 def compare(scene, methods, *, reference: str | None = None, reference_spp: int = 1024,
             equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
             seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
-            device: str = "cpu", progress=None) -> Comparison:
+            device: str = "cpu", progress=None, workers: int = 1, ray: str | None = None) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
 
@@ -188,6 +236,9 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
     Each MethodResult.metrics holds relmse_frame (mean over frames after `warmup`),
     relmse_accumulated, mape, flip (None without flip-evaluator), mean_ratio with mean_z and
     mean_mdb (the image-level bias test; None with fewer than 2 blocks), ms_per_frame.
+
+    workers > 1 or ray: the methods render as independent tasks (restir/fanout.py), for equal
+    samples or frames only: an equal-time comparison needs each method alone on the machine.
     """
     from ..api import check_device, sized_scene
 
@@ -202,6 +253,11 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         raise ConfigError("--equal-time must be > 0 seconds")
     if equal_spp is not None and equal_spp < 1:
         raise ConfigError("--equal-spp must be >= 1")
+    fan_out = ray is not None or workers > 1
+    if fan_out and equal_time is not None:
+        raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
+                          "its time would include the others' load); --workers and --ray apply to equal samples "
+                          "or frames")
     if frames < 1 or warmup < 0 or reference_spp < 1:
         raise ConfigError("frames and reference spp must be >= 1, warmup >= 0")
     from ..integrators import METHODS
@@ -235,5 +291,8 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         budget, text = ("spp", equal_spp), f"equal samples: {equal_spp} spp per pixel per method"
     else:
         budget, text = ("frames", frames), f"{frames} frames per method"
-    results = [_run_method(scene, s, base, ref, budget, warmup, progress) for s in specs]
+    if fan_out:
+        results = _fan_out(scene, specs, base, ref, budget, warmup, workers, ray, progress)
+    else:
+        results = [_run_method(scene, s, base, ref, budget, warmup, progress) for s in specs]
     return Comparison(scene.name, w, h, text, warmup, ref, results, notes)

@@ -4,13 +4,13 @@ Independence comes only from separate runs: each run has its own seed and empty 
 its statistic is its own average image over T frames (pixels and frames within one run are
 correlated through reuse and never treated as independent samples).
 """
-import copy
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..api import render
+from ..fanout import run_tasks
 from ..config import RenderConfig
 from .check import compare
 from .stats import RGBZTest
@@ -61,7 +61,8 @@ class IndependentRuns(ImageBatches):
     "none" (fault injection) is refused unless `allow_mutation` is set (the power checks).
     """
 
-    def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0, allow_mutation: bool = False):
+    def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0, allow_mutation: bool = False,
+                 workers: int = 1, ray: str | None = None):
         if runs < 2:
             from ..config import ConfigError
 
@@ -73,10 +74,8 @@ class IndependentRuns(ImageBatches):
         self.stats = []
         self.counters: dict[str, int] = {}
         images = []
-        for k in range(runs):
-            cfg = copy.copy(config)
-            cfg.seed = seed0 + k
-            r = render(scene, cfg)
+        configs = [dataclasses.replace(config, seed=seed0 + k) for k in range(runs)]
+        for k, r in enumerate(run_tasks([(scene, cfg) for cfg in configs], workers=workers, ray=ray)):
             self.stats.append(r.stats)
             for name, n in r.stats.get("counters", {}).items():
                 if name.startswith("nonfinite") and n:
@@ -137,11 +136,13 @@ class Validation:
 
 
 def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, reference_runs: int | None = None,
-             tile: int = 8, alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB) -> Validation:
+             tile: int = 8, alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB, workers: int = 1,
+             ray: str | None = None) -> Validation:
     """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2);
-    a pass needs a minimum detectable bias of at most `max_mdb` (see Validation.verdict)."""
-    tested = IndependentRuns(scene, config, runs, seed0=1000)
-    ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000)
+    a pass needs a minimum detectable bias of at most `max_mdb` (see Validation.verdict). The runs
+    are independent tasks: `workers` local processes or a Ray cluster (restir/fanout.py)."""
+    tested = IndependentRuns(scene, config, runs, seed0=1000, workers=workers, ray=ray)
+    ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000, workers=workers, ray=ray)
     rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
     return Validation(rep, tested, ref, max_mdb)
 
