@@ -83,6 +83,7 @@ class RenderResult:
     stats: dict
     frame_sums: np.ndarray | None = None  # (4, H, W, 3): sums of frame means^1..^4 (float64)
     frame_images: np.ndarray | None = None  # (F, H, W, 3) when RenderConfig.keep_frames
+    aovs: dict | None = None  # {name: (H, W, 3)} for RenderConfig.aovs (restir/aov.py)
 
     def __repr__(self) -> str:
         st = self.stats
@@ -333,8 +334,13 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_c
              "frames": done, **integ.stats(), "total_ms": total_ms, "setup_ms": setup_ms,
              "triangles": scene.num_triangles, "interrupted": stopped}
     stats["ms_per_frame"] = stats["stage_total_ms"] / done
+    aovs = None
+    if config.aovs:
+        from .aov import compute_aovs
+
+        aovs = compute_aovs(integ, config.aovs, done)
     result = RenderResult(moments.mean.astype(np.float32), moments.variance, moments.n, stats, frame_sums,
-                          np.stack(frames) if frames is not None else None)
+                          np.stack(frames) if frames is not None else None, aovs)
     if stopped:
         raise RenderInterrupted(result)
     return result

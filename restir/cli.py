@@ -109,6 +109,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--write-frames", metavar="DIR",
                    help="also write every frame's image as DIR/frame_0000.exr, frame_0001.exr, ...")
     r.add_argument("--quiet", action="store_true", help="no progress bar, timing table or notes")
+    r.add_argument("--aov", metavar="NAMES", help="also write these layers into the EXR: albedo, normal (comma-"
+                   "separated; channels albedo.R/G/B, normal.X/Y/Z, as Mitsuba's aov integrator), for denoisers")
+    r.add_argument("--tev", nargs="?", const="127.0.0.1:14158", metavar="HOST:PORT",
+                   help="also send the image (and AOVs) to a running tev viewer (needs restir[tev]; default "
+                        "127.0.0.1:14158)")
 
     sub.add_parser("info", help="list the methods with their settings (defaults, meanings) and the builtin scenes")
     v = sub.add_parser("validate", formatter_class=_Formatter, epilog=_builtins_epilog(),
@@ -173,6 +178,10 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
     _fanout_options(c, default_workers=1, what="the methods (equal samples or frames only)")
+    c.add_argument("--denoise", action="store_true", help="also denoise each method's last frame with Open Image "
+                   "Denoise (albedo and normal AOVs; needs restir[denoise]) and show it in the report")
+    c.add_argument("--tev", nargs="?", const="127.0.0.1:14158", metavar="HOST:PORT",
+                   help="also send the reference and every method's image to a running tev (needs restir[tev])")
 
     s = sub.add_parser("sweep", formatter_class=_Formatter, epilog=_builtins_epilog(),
                        help="one method over a grid of settings and seeds, fanned out locally or on Ray")
@@ -303,13 +312,23 @@ def _render(args) -> int:
     from .image_io import write_exr, write_image, write_png
 
     console = Console(stderr=True, quiet=args.quiet)
+    from .aov import parse_aovs
+
+    aovs = parse_aovs(args.aov) if args.aov else ()
     config = RenderConfig(method=args.method, spp=args.spp, frames=args.frames, width=args.width,
                           height=args.height, max_depth=args.max_depth, seed=args.seed, device=args.device, tracer=args.tracer,
                           camera_motion=args.camera_motion, camera_speed=args.camera_speed,
-                          settings=dict(args.settings), keep_frames=bool(args.write_frames))
+                          settings=dict(args.settings), keep_frames=bool(args.write_frames), aovs=aovs)
     config.validate()
     output = args.output or default_output(args.scene)
     check_output(output, "-o" if args.output else "output", tuple(IMAGE_FORMATS))
+    if aovs and not output.lower().endswith(".exr"):
+        raise ConfigError(f"--aov writes layers of an EXR; the output {output} is not .exr")
+    tev = None
+    if args.tev:
+        from .viewer import connect_tev
+
+        tev = connect_tev(args.tev)  # before the render: a missing package or viewer is said now
     if args.png:
         check_output(args.png, "--png", LDR_FORMATS)
     if args.stats:
@@ -335,8 +354,18 @@ def _render(args) -> int:
     if interrupted:
         print(f"interrupted after {result.frames} finished frame(s) of {config.frames}: writing their average",
               file=sys.stderr)
-    _write(output, write_image, result.image, args.exposure)
+    if result.aovs:
+        from .image_io import write_exr as _write_exr
+
+        _write(output, _write_exr, result.image, result.aovs)
+    else:
+        _write(output, write_image, result.image, args.exposure)
     written = [output]
+    if tev is not None:
+        from .viewer import send_to_tev
+
+        send_to_tev(tev, f"{result.stats['method']} {result.stats['scene']}", result.image, result.aovs)
+        tev.__exit__(None, None, None)
     if args.png:
         _write(args.png, write_png, result.image, args.exposure)
         written.append(args.png)
@@ -498,6 +527,11 @@ def _compare(args) -> int:
         check_output(args.json, "--json", (".json",))
     if args.report:
         check_output_folder(args.report, "--report")
+    tev = None
+    if args.tev:
+        from .viewer import connect_tev
+
+        tev = connect_tev(args.tev)
     scene = _load_scene(args.scene, args.defines,
                         lambda m: console.print(f"[yellow]warning:[/] {escape(m)}", highlight=False, soft_wrap=True))
     with Progress("[progress.description]{task.description}", BarColumn(), "{task.percentage:>3.0f}%",
@@ -513,21 +547,31 @@ def _compare(args) -> int:
                          equal_time=args.equal_time, equal_spp=args.equal_spp, frames=args.frames,
                          warmup=args.warmup, seed=args.seed, width=args.width, height=args.height,
                          max_depth=args.max_depth, device=args.device, progress=progress,
-                         workers=args.workers, ray=args.ray)
+                         workers=args.workers, ray=args.ray, denoise=args.denoise)
     for note in result.notes:
         console.print(f"note: {escape(note)}", highlight=False, soft_wrap=True)
     table = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "
                         f"{result.reference.source}")
     for col in ("method", "frames", "ms/frame", "relMSE per frame", "relMSE accumulated", "MAPE", "FLIP",
-                "mean ratio (z)"):
+                "mean ratio (z)") + (("denoised frame relMSE",) if args.denoise else ()):
         table.add_column(col, justify="left" if col == "method" else "right")
     for m in result.methods:
         x = m.metrics
         z = f" ({x['mean_z']:+.2f})" if x["mean_z"] is not None else ""
         table.add_row(escape(m.label), str(m.frames), f"{x['ms_per_frame']:.1f}", f"{x['relmse_frame']:.4g}",
                       f"{x['relmse_accumulated']:.4g}", f"{x['mape']:.4g}",
-                      "-" if x["flip"] is None else f"{x['flip']:.4f}", f"{x['mean_ratio']:.4f}{z}")
+                      "-" if x["flip"] is None else f"{x['flip']:.4f}", f"{x['mean_ratio']:.4f}{z}",
+                      *([f"{x['relmse_denoised_frame']:.4g}"] if args.denoise else []))
     Console(width=None if sys.stdout.isatty() else 200).print(table)
+    if tev is not None:
+        from .viewer import send_to_tev
+
+        send_to_tev(tev, "reference", result.reference.image.astype("float32"))
+        for m in result.methods:
+            send_to_tev(tev, m.label, m.image)
+            if m.denoised is not None:
+                send_to_tev(tev, m.label + " (last frame denoised)", m.denoised)
+        tev.__exit__(None, None, None)
     if args.json:
         _write(args.json, _write_json, result.to_dict())
         console.print(f"wrote {escape(args.json)}", highlight=False)

@@ -27,6 +27,7 @@ class RenderConfig:
     keep_frames: bool = False       # keep every frame's image (RenderResult.frame_images), for statistics
     camera_motion: str = "none"     # "none", "orbit" (speed: degrees/frame), "dolly" (speed: scene sizes/frame)
     camera_speed: float = 1.0
+    aovs: tuple = ()                # extra outputs: "albedo", "normal" (RenderResult.aovs; restir/aov.py)
 
     def validate(self) -> None:
         if self.spp is not None and self.spp < 1:
@@ -45,6 +46,11 @@ class RenderConfig:
             raise ConfigError("tracer must be auto, embree or warp")
         if not 0 <= self.seed < 2**32:
             raise ConfigError("seed must be in [0, 2^32)")
+        from .aov import AOVS
+
+        bad = [a for a in self.aovs if a not in AOVS]
+        if bad:
+            raise ConfigError(f"unknown AOV {', '.join(bad)} (available: {', '.join(AOVS)})")
 
 
 def parse_value(text: str, like):

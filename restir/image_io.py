@@ -7,14 +7,35 @@ import os
 import numpy as np
 
 
-def write_exr(path: str, rgb: np.ndarray) -> None:
+def write_exr(path: str, rgb: np.ndarray, layers: dict | None = None) -> None:
+    """rgb as the R, G, B channels; layers {name: (H, W, 3) array, ...} as further channels
+    name.R/G/B, or name.X/Y/Z for normals (restir/aov.py CHANNELS), as Mitsuba's aov integrator."""
     import OpenEXR
 
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    rgb = np.ascontiguousarray(rgb, dtype=np.float32)
+    channels = {"RGB": np.ascontiguousarray(rgb, dtype=np.float32)}
+    for name, image in (layers or {}).items():
+        suffixes = ("X", "Y", "Z") if name == "normal" else ("R", "G", "B")
+        for c, suffix in enumerate(suffixes):
+            channels[f"{name}.{suffix}"] = np.ascontiguousarray(np.asarray(image)[..., c], dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, {"RGB": rgb}) as f:
+    with OpenEXR.File(header, channels) as f:
         f.write(path)
+
+
+def read_exr_layers(path: str) -> dict:
+    """{layer: (H, W, 3)} of an EXR written with layers (see write_exr); "" is the RGB image."""
+    import OpenEXR
+
+    with OpenEXR.File(path, separate_channels=True) as f:
+        ch = {k: np.asarray(v.pixels, np.float32) for k, v in f.channels().items()}
+    out = {}
+    for name in sorted({k.rsplit(".", 1)[0] if "." in k else "" for k in ch}):
+        prefix = name + "." if name else ""
+        suffixes = ("X", "Y", "Z") if name == "normal" else ("R", "G", "B")
+        if all(prefix + s in ch for s in suffixes):
+            out[name] = np.stack([ch[prefix + s] for s in suffixes], -1)
+    return out
 
 
 def read_exr(path: str) -> np.ndarray:

@@ -211,6 +211,7 @@ def write_report(result, folder: str) -> str:
 
     os.makedirs(folder, exist_ok=True)
     images = [("reference", result.reference.image)] + [(m.label, m.image) for m in result.methods]
+    images += [(f"{m.label}: last frame denoised", m.denoised) for m in result.methods if m.denoised is not None]
     data = {"width": result.width, "height": result.height,
             "images": [{"label": label, "data": _encode(img)} for label, img in images]}
     with open(os.path.join(folder, "data.js"), "w") as f:
@@ -236,9 +237,10 @@ def write_report(result, folder: str) -> str:
         x = m.metrics
         z = f" (z {x['mean_z']:+.2f}, MDB {100 * x['mean_mdb']:.2f}%)" if x["mean_z"] is not None else ""
         mem = m.stats.get("bytes_per_pixel", {}).get("total")
+        den = x.get("relmse_denoised_frame")
         rows.append(f"<tr><td>{e(m.label)}</td><td>{m.frames}</td><td>{m.spp}</td><td>{x['ms_per_frame']:.1f}</td>"
                     f"<td>{x['relmse_frame']:.4g}</td><td>{x['relmse_accumulated']:.4g}</td><td>{x['mape']:.4g}</td>"
-                    f"<td>{_fmt(x['flip'], '{:.4f}')}</td><td>{x['mean_ratio']:.4f}{z}</td>"
+                    f"<td>{_fmt(x['flip'], '{:.4f}')}</td><td>{x['mean_ratio']:.4f}{z}</td><td>{_fmt(den)}</td>"
                     f"<td>{_fmt(mem, '{:.0f}')}</td></tr>")
     notes = "".join(f'<p class="note">note: {e(n)}</p>' for n in result.notes)
     page = f"""<!DOCTYPE html>
@@ -266,7 +268,8 @@ r resets. The crops below follow the view.</p>
 <div id="crops">{crops}</div>
 <h2>Metrics</h2>
 <table><tr><th>method</th><th>frames</th><th>spp/frame</th><th>ms/frame</th><th>relMSE per frame</th>
-<th>relMSE accumulated</th><th>MAPE</th><th>FLIP</th><th>mean ratio</th><th>bytes/pixel</th></tr>
+<th>relMSE accumulated</th><th>MAPE</th><th>FLIP</th><th>mean ratio</th><th>relMSE of the denoised last frame</th>
+<th>bytes/pixel</th></tr>
 {''.join(rows)}</table>
 <h2>Convergence</h2>
 {''.join(_plots(result))}

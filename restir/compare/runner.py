@@ -76,6 +76,7 @@ class MethodResult:
     metrics: dict                  # see `compare`
     stats: dict                    # the integrator's stats (per-stage ms, bytes per pixel, counters)
     last_frame: np.ndarray | None = None
+    denoised: np.ndarray | None = None  # the last frame through Open Image Denoise (compare(denoise=True))
 
 
 @dataclasses.dataclass
@@ -93,7 +94,7 @@ class Comparison:
         """Everything but the images, as plain JSON data."""
         return {"scene": self.scene, "width": self.width, "height": self.height, "budget": self.budget,
                 "warmup": self.warmup, "reference": self.reference.source, "notes": list(self.notes),
-                "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in ("image", "last_frame")}
+                "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in ("image", "last_frame", "denoised")}
                             for m in self.methods]}
 
 
@@ -223,7 +224,8 @@ def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progre
 def compare(scene, methods, *, reference: str | None = None, reference_spp: int = 1024,
             equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
             seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
-            device: str = "cpu", progress=None, workers: int = 1, ray: str | None = None) -> Comparison:
+            device: str = "cpu", progress=None, workers: int = 1, ray: str | None = None,
+            denoise: bool = False) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
 
@@ -239,6 +241,10 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
 
     workers > 1 or ray: the methods render as independent tasks (restir/fanout.py), for equal
     samples or frames only: an equal-time comparison needs each method alone on the machine.
+
+    denoise: each method's last frame is also denoised by Intel Open Image Denoise (the `pyoidn`
+    package, the `denoise` extra) with albedo and normal AOVs (restir/aov.py), the real-time use
+    of ReSTIR; MethodResult.denoised holds it and metrics["relmse_denoised_frame"] its error.
     """
     from ..api import check_device, sized_scene
 
@@ -258,6 +264,11 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
                           "its time would include the others' load); --workers and --ray apply to equal samples "
                           "or frames")
+    if denoise:
+        try:
+            import pyoidn  # noqa: F401
+        except ImportError:
+            raise ConfigError("--denoise needs Open Image Denoise: pip install 'restir[denoise]'") from None
     if frames < 1 or warmup < 0 or reference_spp < 1:
         raise ConfigError("frames and reference spp must be >= 1, warmup >= 0")
     from ..integrators import METHODS
@@ -295,4 +306,24 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         results = _fan_out(scene, specs, base, ref, budget, warmup, workers, ray, progress)
     else:
         results = [_run_method(scene, s, base, ref, budget, warmup, progress) for s in specs]
+    if denoise:
+        _denoise(scene, base, results, ref)
     return Comparison(scene.name, w, h, text, warmup, ref, results, notes)
+
+
+def _denoise(scene, base: RenderConfig, results, reference: Reference):
+    """Each method's last frame through OIDN's RT filter (HDR, with noise-free albedo and normal
+    averaged over 64 camera samples)."""
+    import pyoidn
+
+    from ..aov import AOV_SAMPLES, compute_aovs
+    from ..api import make_integrator, sized_scene
+
+    cfg = dataclasses.replace(base, method="pt", spp=1, frames=1)
+    aux = compute_aovs(make_integrator(sized_scene(scene, cfg), cfg), ("albedo", "normal"), AOV_SAMPLES)
+    albedo = np.clip(aux["albedo"], 0.0, 1.0).astype(np.float32)
+    normal = aux["normal"].astype(np.float32)
+    for m in results:
+        color = np.clip(np.nan_to_num(m.last_frame), 0.0, None).astype(np.float32)
+        m.denoised = np.asarray(pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True), np.float32)
+        m.metrics["relmse_denoised_frame"] = metrics.relmse(m.denoised, reference.image)
