@@ -14,6 +14,8 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/restir render builtin:cornell-box --width 512 --height 512 --spp 16 \
 		-o out/cornell-box.exr --png out/cornell-box.png --stats out/cornell-box.json
+	$(VENV)/bin/restir compare builtin:cornell-box --method pt --method restir-di --equal-time 4 \
+		--width 128 --height 128 --reference-spp 256 --report out/demo-compare
 
 # The report test drives Debian's chromium with chromedriver (Selenium); nothing downloads a browser.
 browser:
