@@ -157,8 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--method", dest="methods", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="a method to compare, with its settings (spp=N: samples per pixel per frame); repeat "
                         "for each method, e.g. --method pt --method 'restir-di:spatial.neighbors=8'")
-    c.add_argument("--reference", metavar="FILE", help="reference image (.exr, .npy, .png) of the compared size "
-                   "(default: the path tracer at --reference-spp, cached under ~/.cache/restir or $RESTIR_CACHE)")
+    c.add_argument("--reference", metavar="FILE", help="reference image (.exr, .npy, .png) of the compared size, or "
+                   "'mitsuba': Mitsuba 3 at --reference-spp on the same XML (restir[reference]) (default: the path "
+                   "tracer at --reference-spp; both cached under ~/.cache/restir or $RESTIR_CACHE)")
     c.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
     budget = c.add_mutually_exclusive_group()
     budget.add_argument("--equal-time", type=float, metavar="SECONDS",
@@ -547,7 +548,8 @@ def _compare(args) -> int:
                          equal_time=args.equal_time, equal_spp=args.equal_spp, frames=args.frames,
                          warmup=args.warmup, seed=args.seed, width=args.width, height=args.height,
                          max_depth=args.max_depth, device=args.device, progress=progress,
-                         workers=args.workers, ray=args.ray, denoise=args.denoise)
+                         workers=args.workers, ray=args.ray, denoise=args.denoise, scene_file=args.scene,
+                         defines=dict(args.defines))
     for note in result.notes:
         console.print(f"note: {escape(note)}", highlight=False, soft_wrap=True)
     table = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "

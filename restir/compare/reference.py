@@ -83,3 +83,61 @@ def path_traced_reference(scene, spp: int, config: RenderConfig, progress=None) 
     np.savez_compressed(tmp, image=result.image.astype(np.float64), blocks=blocks, key=key_text)
     os.replace(tmp, path)  # atomic: a concurrent or interrupted run never leaves half a file
     return Reference(result.image.astype(np.float64), source, blocks)
+
+
+MITSUBA_VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
+
+
+def mitsuba_reference(scene, scene_file: str, defines: dict | None, spp: int, config: RenderConfig) -> Reference:
+    """Mitsuba 3 (the `reference` extra) renders the same XML file as the reference: 16 renders with
+    independent seeds at spp / 16 each (their spread is the reference's variance), cached as the
+    path tracer's are. The size and max_depth are passed as the XML's `resx`, `resy` and
+    `max_depth` defaults, which the scene must declare when they differ from its own."""
+    import re
+
+    if not scene_file or scene_file.startswith("builtin:") or not os.path.isfile(scene_file):
+        raise ConfigError("--reference mitsuba renders a Mitsuba 3 XML file; builtin scenes have none")
+    try:
+        import mitsuba as mi
+    except ImportError:
+        raise ConfigError("--reference mitsuba needs Mitsuba 3: pip install 'restir[reference]' (its llvm_ad_rgb "
+                          "variant also needs Debian's libllvm19 and DRJIT_LIBLLVM_PATH; scalar_rgb works without)") from None
+    text = open(scene_file).read()
+    declared = set(re.findall(r'<default\s+name="([A-Za-z_][A-Za-z0-9_]*)"', text))
+    params = {k: str(v) for k, v in (defines or {}).items()}
+    wanted = {"resx": config.width, "resy": config.height, "max_depth": config.max_depth}
+    own = {"resx": scene.camera.width, "resy": scene.camera.height, "max_depth": scene.max_depth}
+    for k, v in wanted.items():
+        if v is None or v == own[k]:
+            continue
+        if k not in declared:
+            raise ConfigError(f"--reference mitsuba: {scene_file} declares no <default name=\"{k}\">, so Mitsuba "
+                              f"cannot render it at {k} {v}; compare at the scene's own value ({own[k]})")
+        params[k] = str(v)
+    frames = REFERENCE_FRAMES if spp >= REFERENCE_FRAMES else max(2, spp)
+    per_render = max(1, spp // frames)
+    key_text = json.dumps({"renderer": "mitsuba", "scene": scene_digest(scene), "params": params, "spp": per_render,
+                           "renders": frames, "version": __version__}, sort_keys=True)
+    key = hashlib.sha256(key_text.encode()).hexdigest()[:24]
+    path = os.path.join(cache_folder(), key + ".npz")
+    if os.path.isfile(path):
+        with np.load(path) as data:
+            return Reference(data["image"], f"mitsuba {per_render * frames} spp (cache {path})", data["blocks"])
+    # llvm_ad_rgb only where Dr.Jit is pointed at a libLLVM it supports (DRJIT_LIBLLVM_PATH: another
+    # libLLVM found on the system can abort the process inside the JIT); scalar_rgb otherwise.
+    # RESTIR_MITSUBA_VARIANT overrides.
+    variant = os.environ.get("RESTIR_MITSUBA_VARIANT") or \
+        (MITSUBA_VARIANTS[0] if os.environ.get("DRJIT_LIBLLVM_PATH") else MITSUBA_VARIANTS[1])
+    try:
+        mi.set_variant(variant)
+    except Exception as e:
+        raise ConfigError(f"--reference mitsuba: Mitsuba's variant {variant} is not usable here ({e})") from None
+    ms = mi.load_file(scene_file, **params)
+    blocks = np.stack([np.asarray(mi.render(ms, spp=per_render, seed=7000 + i), np.float64)[..., :3]
+                       for i in range(frames)]).astype(np.float32)
+    image = blocks.astype(np.float64).mean(0)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path + f".{os.getpid()}.tmp.npz"
+    np.savez_compressed(tmp, image=image, blocks=blocks, key=key_text)
+    os.replace(tmp, path)
+    return Reference(image, f"mitsuba {mi.variant()} {per_render * frames} spp (cache {path})", blocks)

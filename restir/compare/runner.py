@@ -225,12 +225,13 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
             equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
             seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
             device: str = "cpu", progress=None, workers: int = 1, ray: str | None = None,
-            denoise: bool = False) -> Comparison:
+            denoise: bool = False, scene_file: str | None = None, defines: dict | None = None) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
 
-    reference: an image file (EXR, PNG, NPY) of the same size, or None for the path tracer at
-    `reference_spp` (cached, see reference.py). Budget: `equal_time` seconds of frames per method,
+    reference: an image file (EXR, PNG, NPY) of the same size, None for the path tracer at
+    `reference_spp`, or "mitsuba" for Mitsuba 3 at `reference_spp` on `scene_file` (the XML the
+    scene was loaded from, with its `defines`); both cached, see reference.py. Budget: `equal_time` seconds of frames per method,
     or `equal_spp` samples per pixel in total, or `frames` frames each (also the cap on frames under
     equal time, when given explicitly as more than the default). `progress(label, fraction)` is
     called after every frame (label "reference" while the reference renders).
@@ -291,7 +292,12 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
     sized = sized_scene(scene, base)
     w, h = sized.camera.width, sized.camera.height
     base = dataclasses.replace(base, width=w, height=h)
-    if reference is not None:
+    if reference == "mitsuba":
+        from .reference import mitsuba_reference
+
+        ref = mitsuba_reference(scene, scene_file, defines, reference_spp,
+                                dataclasses.replace(base, width=width, height=height, max_depth=max_depth))
+    elif reference is not None:
         ref = load_reference_file(reference, w, h)
     else:
         ref = path_traced_reference(scene, reference_spp, base,

@@ -195,3 +195,25 @@ def test_report_in_a_browser(comparison, tmp_path):
         assert not errors, errors
     finally:
         driver.quit()
+
+
+@pytest.mark.slow
+def test_mitsuba_reference(tmp_path, monkeypatch):
+    """--reference mitsuba: Mitsuba 3 (scalar_rgb unless DRJIT_LIBLLVM_PATH is set) renders the same
+    XML at the compared size and depth; our path tracer agrees with it (mean ratio z), and the
+    reference is cached."""
+    pytest.importorskip("mitsuba")  # the `reference` extra
+    from tests.shared_scenes import scene_path
+
+    monkeypatch.setenv("RESTIR_CACHE", str(tmp_path))
+    path = str(scene_path("cornell-box"))
+    scene = restir.load_scene(path)
+    r = compare(scene, ["pt:spp=4"], reference="mitsuba", reference_spp=256, frames=16, width=32, height=32,
+                max_depth=4, scene_file=path)
+    assert r.reference.source.startswith("mitsuba") and r.reference.blocks.shape == (16, 32, 32, 3)
+    m = r.methods[0].metrics
+    assert abs(m["mean_z"]) < 5 and abs(m["mean_ratio"] - 1) < 0.05, m
+    assert len(list((tmp_path / "references").iterdir())) == 1
+    with pytest.raises(ConfigError, match="builtin scenes have none"):
+        compare(restir.load_scene("builtin:cornell-box"), ["pt"], reference="mitsuba", frames=2, width=8, height=8,
+                scene_file="builtin:cornell-box")
