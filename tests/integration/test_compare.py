@@ -150,28 +150,24 @@ def _chromium():
     return webdriver.Chrome(options=opts, service=Service(shutil.which("chromedriver") or "/usr/bin/chromedriver"))
 
 
-def test_report_in_a_browser(comparison, tmp_path):
-    """Open the report in chromium: every image decoded and finite, every plot drawn, a number key
-    switches the image shown (and the canvas changes), the wheel zooms (the view and the canvas
-    change), no console errors; a screenshot is kept in out/artifacts/."""
+def operate_report(index, images, screenshot):
+    """Open the report at `index` in chromium and operate it: every image decoded to `images` (the
+    reference first) and finite, every plot drawn, a number key switches the image shown (and the
+    canvas changes), the wheel zooms (the view and the canvas change), 'e' shows the error view,
+    no console errors; a screenshot is kept in out/artifacts/."""
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
-    from restir.compare.report import write_report
-
-    result, _ = comparison
-    index = write_report(result, str(tmp_path / "report"))
     driver = _chromium()
     try:
         driver.get("file://" + os.path.abspath(index))
-        WebDriverWait(driver, 30).until(lambda d: d.execute_script("return document.body.dataset.ready === '1'"))
-        n = driver.execute_script("return IMAGES.length")
-        assert n == 1 + len(result.methods)
+        WebDriverWait(driver, 60).until(lambda d: d.execute_script("return document.body.dataset.ready === '1'"))
+        assert driver.execute_script("return IMAGES.length") == len(images)
         stats = driver.execute_script("return IMAGES.map(im => [im.rgb.length, im.rgb.every(Number.isFinite), "
                                       "im.rgb.reduce((a, b) => a + b, 0) / im.rgb.length])")
-        for (length, finite, mean), img in zip(stats, [result.reference.image] + [m.image for m in result.methods]):
+        for (length, finite, mean), img in zip(stats, images):
             assert length == img.size and finite and mean == pytest.approx(float(np.mean(img)), rel=2e-3)
         assert driver.execute_script("return document.querySelectorAll('.js-plotly-plot .main-svg').length") >= 5
         main = driver.find_element(By.ID, "main")
@@ -190,12 +186,39 @@ def test_report_in_a_browser(comparison, tmp_path):
         ActionChains(driver).send_keys("e").perform()
         assert driver.execute_script("return restirView.error") is True
         os.makedirs(ARTIFACTS, exist_ok=True)
-        driver.save_screenshot(os.path.join(ARTIFACTS, "compare_report.png"))
+        driver.save_screenshot(os.path.join(ARTIFACTS, screenshot))
         errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
         assert not errors, errors
     finally:
         driver.quit()
 
+
+def test_report_in_a_browser(comparison, tmp_path):
+    from restir.compare.report import write_report
+
+    result, _ = comparison
+    index = write_report(result, str(tmp_path / "report"))
+    operate_report(index, [result.reference.image] + [m.image for m in result.methods], "compare_report.png")
+
+
+@pytest.mark.slow
+def test_the_documented_command_in_a_browser(tmp_path):
+    """The issue's command as written (20 s per method at the Cornell box's own 256x256), its report
+    operated in chromium, its JSON's numbers recomputed from the report's EXRs."""
+    out = tmp_path / "cmp"
+    env = {**os.environ, "RESTIR_CACHE": str(tmp_path / "cache")}
+    p = subprocess.run([sys.executable, "-m", "restir", "compare", "builtin:cornell-box", "--method", "pt",
+                        "--method", "restir-di", "--equal-time", "20", "--report", str(out)],
+                       capture_output=True, text=True, env=env, timeout=1800)
+    assert p.returncode == 0, p.stderr
+    data = json.load(open(out / "comparison.json"))
+    images = [read_exr(str(out / "images" / f"{i}.exr")) for i in range(3)]
+    for m, img in zip(data["methods"], images[1:]):
+        assert m["seconds"] >= 20 and m["frames"] >= 2
+        ref = images[0].astype(np.float64)
+        rel = np.mean((img - ref) ** 2 / (ref ** 2 + 0.01))
+        assert m["metrics"]["relmse_accumulated"] == pytest.approx(rel, rel=1e-4)
+    operate_report(str(out / "index.html"), images, "compare_report_documented.png")
 
 @pytest.mark.slow
 def test_mitsuba_reference(tmp_path, monkeypatch):
