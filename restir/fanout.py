@@ -4,9 +4,11 @@ A task is `render_task(scene, config)`: one render of a loaded scene (scenes and
 so they travel to pool workers and through Ray's object store), returning its RenderResult.
 Renders are deterministic functions of (scene, config) on the CPU, so the same seeds give
 bitwise the same images wherever they run. Each worker process loads the kernels from Warp's
-kernel cache on its node's disk (`WARP_CACHE_PATH`, default ~/.cache/warp): the first process to
-need a configuration compiles it and the others on that node load it, so kernels compile once
-per node.
+kernel cache on its node's disk (`WARP_CACHE_PATH`, default ~/.cache/warp). Before a local pool
+starts, this process compiles every distinct configuration once (a 16x16 frame), so the workers
+only load. On Ray, the first tasks of a configuration on a node compile it; Warp builds each
+compilation in a folder of its own and renames it into the cache, so tasks that start together
+compile it side by side harmlessly and every later task on that node loads it.
 """
 import concurrent.futures as cf
 import multiprocessing as mp
@@ -20,6 +22,24 @@ def render_task(scene, config):
     from .api import render
 
     return render(scene, config)
+
+
+def warm_kernels(tasks) -> None:
+    """Compile (or load) the kernels of every distinct configuration in `tasks` here, on a 16x16
+    frame, so that pool workers find them in the kernel cache."""
+    import dataclasses
+
+    from .api import make_integrator, sized_scene
+
+    seen = set()
+    for scene, config in tasks:
+        key = (id(scene), config.method, repr(sorted(config.settings.items())), config.max_depth, config.device,
+               config.tracer)
+        if key in seen:
+            continue
+        seen.add(key)
+        small = dataclasses.replace(config, width=16, height=16, frames=1, spp=1, aovs=())
+        make_integrator(sized_scene(scene, small), small).render_frame(0)
 
 
 def default_workers() -> int:
@@ -46,6 +66,7 @@ def run_tasks(tasks, workers: int | None = None, ray: str | None = None, progres
             if progress:
                 progress(i + 1, len(tasks))
         return results
+    warm_kernels(tasks)
     # spawn, not fork: Warp and Embree hold native state that a forked child must not share
     with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=mp.get_context("spawn")) as pool:
         futures = {pool.submit(render_task, scene, config): i for i, (scene, config) in enumerate(tasks)}

@@ -170,10 +170,9 @@ def measure(label, config: RenderConfig, frames: FrameStats, frame_seconds, refe
 def _compile_first(scene, config: RenderConfig):
     """Load (compile if needed) the method's kernels on a 16x16 render, so that no budget is spent
     compiling."""
-    from ..api import make_integrator, sized_scene
+    from ..fanout import warm_kernels
 
-    small = dataclasses.replace(config, width=16, height=16, frames=1)
-    make_integrator(sized_scene(scene, small), small).render_frame(0)
+    warm_kernels([(scene, config)])
 
 
 def _run_method(scene, spec: MethodSpec, base: RenderConfig, reference: Reference, budget, warmup, progress):
