@@ -178,7 +178,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--report", metavar="DIR", help="write the HTML report (opens offline) into this folder")
     c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
-    _fanout_options(c, default_workers=1, what="the methods (equal samples or frames only)")
+    _fanout_options(c, default_workers=None, what="the methods (equal samples or frames; equal time renders "
+                    "them one after another)")
     c.add_argument("--denoise", action="store_true", help="also denoise each method's last frame with Open Image "
                    "Denoise (albedo and normal AOVs; needs restir[denoise]) and show it in the report")
     c.add_argument("--tev", nargs="?", const="127.0.0.1:14158", metavar="HOST:PORT",

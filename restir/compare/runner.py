@@ -223,7 +223,7 @@ def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progre
 def compare(scene, methods, *, reference: str | None = None, reference_spp: int = 1024,
             equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
             seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
-            device: str = "cpu", progress=None, workers: int = 1, ray: str | None = None,
+            device: str = "cpu", progress=None, workers: int | None = None, ray: str | None = None,
             denoise: bool = False, scene_file: str | None = None, defines: dict | None = None) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
@@ -239,8 +239,10 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
     relmse_accumulated, mape, flip (None without flip-evaluator), mean_ratio with mean_z and
     mean_mdb (the image-level bias test; None with fewer than 2 blocks), ms_per_frame.
 
-    workers > 1 or ray: the methods render as independent tasks (restir/fanout.py), for equal
-    samples or frames only: an equal-time comparison needs each method alone on the machine.
+    workers (default: one per core for equal samples or frames, 1 at equal time) > 1 or ray: the
+    methods render as independent tasks (restir/fanout.py), for equal samples or frames only: an
+    equal-time comparison needs each method alone on the machine. (Their ms per frame are then
+    measured under each other's load.)
 
     denoise: each method's last frame is also denoised by Intel Open Image Denoise (the `pyoidn`
     package, the `denoise` extra) with albedo and normal AOVs (restir/aov.py), the real-time use
@@ -259,6 +261,10 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         raise ConfigError("--equal-time must be > 0 seconds")
     if equal_spp is not None and equal_spp < 1:
         raise ConfigError("--equal-spp must be >= 1")
+    if workers is None:
+        from ..fanout import default_workers
+
+        workers = 1 if equal_time is not None else min(default_workers(), len(specs))
     fan_out = ray is not None or workers > 1
     if fan_out and equal_time is not None:
         raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
