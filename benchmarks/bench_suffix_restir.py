@@ -87,6 +87,35 @@ def query_ms(scene, size, max_depth, settings=None):
         if x[0] < 1.0e29:
             found[pixel] = nearest_prefix_ends(search, x, count).found
 
+    @wp.kernel
+    def count_kernel(offset: int, search: SearchStructure, points: wp.array(dtype=wp.vec3),
+                     visited: wp.array(dtype=int), inside: wp.array(dtype=int)):
+        """Per query: the candidates the structure hands over, and the boxes that hold the point."""
+        pixel = wp.tid() + offset
+        x = points[pixel]
+        if x[0] < 1.0e29:
+            n = int(0)
+            v = int(0)
+            k = int(0)
+            if search.kind == 1:
+                q = wp.bvh_query_aabb(search.id, x, x)
+                while wp.bvh_query_next(q, n):
+                    v += 1
+                    d = search.centers[n] - x
+                    h = search.halves[n]
+                    if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
+                        k += 1
+            else:
+                g = wp.hash_grid_query(search.id, x, search.radius)
+                while wp.hash_grid_query_next(g, n):
+                    v += 1
+                    d = search.centers[n] - x
+                    h = search.halves[n]
+                    if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
+                        k += 1
+            visited[pixel] = v
+            inside[pixel] = k
+
     sc = restir.load_scene(scene)
     sc.camera.width = sc.camera.height = size
     integ = make_integrator(sc, restir.RenderConfig(method="suffix-restir", spp=1, max_depth=max_depth,
@@ -105,7 +134,13 @@ def query_ms(scene, size, max_depth, settings=None):
     for _ in range(3):
         launch_pixels(queries_kernel, n, args, [points, found], integ.device, integ.slices)
     wp.synchronize()
-    return (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
+    ms = (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
+    visited = wp.zeros(n, dtype=int, device=integ.device)
+    inside = wp.zeros(n, dtype=int, device=integ.device)
+    launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)
+    valid = points.numpy()[:, 0] < 1.0e29
+    query_ms.counts = (float(visited.numpy()[valid].mean()), float(inside.numpy()[valid].mean()))
+    return ms
 
 
 def phase_stages(args, out):
