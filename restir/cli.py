@@ -583,7 +583,7 @@ def _compare(args) -> int:
 
         index = write_report(result, args.report)
         console.print(f"wrote the report: {escape(index)}", highlight=False, soft_wrap=True)
-    return 0
+    return 130 if result.interrupted else 0
 
 
 def _sweep(args) -> int:

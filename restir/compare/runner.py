@@ -77,6 +77,7 @@ class MethodResult:
     stats: dict                    # the integrator's stats (per-stage ms, bytes per pixel, counters)
     last_frame: np.ndarray | None = None
     denoised: np.ndarray | None = None  # the last frame through Open Image Denoise (compare(denoise=True))
+    interrupted: bool = False           # Ctrl-C stopped it before its budget was spent
 
 
 @dataclasses.dataclass
@@ -89,11 +90,13 @@ class Comparison:
     reference: Reference
     methods: list
     notes: list = dataclasses.field(default_factory=list)
+    interrupted: bool = False  # Ctrl-C: the methods up to the interrupted one, the rest not run
 
     def to_dict(self) -> dict:
         """Everything but the images, as plain JSON data."""
         return {"scene": self.scene, "width": self.width, "height": self.height, "budget": self.budget,
                 "warmup": self.warmup, "reference": self.reference.source, "notes": list(self.notes),
+                "interrupted": self.interrupted,
                 "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in ("image", "last_frame", "denoised")}
                             for m in self.methods]}
 
@@ -185,15 +188,23 @@ def _run_method(scene, spec: MethodSpec, base: RenderConfig, reference: Referenc
     integ = make_integrator(sized_scene(scene, config), config)
     frames, frame_seconds = FrameStats(reference), []
     elapsed = 0.0
-    while frames.count < frames_max and not (kind == "time" and elapsed >= amount):
-        t = time.perf_counter()
-        mean, _ = integ.render_frame(frames.count)
-        elapsed += time.perf_counter() - t
-        frames.add(mean)
-        frame_seconds.append(elapsed)
-        if progress:
-            progress(spec.label, min(1.0, elapsed / amount) if kind == "time" else frames.count / frames_max)
-    return measure(spec.label, config, frames, frame_seconds, reference, warmup, integ.stats())
+    interrupted = False
+    try:
+        while frames.count < frames_max and not (kind == "time" and elapsed >= amount):
+            t = time.perf_counter()
+            mean, _ = integ.render_frame(frames.count)
+            elapsed += time.perf_counter() - t
+            frames.add(mean)
+            frame_seconds.append(elapsed)
+            if progress:
+                progress(spec.label, min(1.0, elapsed / amount) if kind == "time" else frames.count / frames_max)
+    except KeyboardInterrupt:  # Ctrl-C: keep the frames that finished (none: nothing to keep)
+        if frames.count == 0:
+            raise
+        interrupted = True
+    result = measure(spec.label, config, frames, frame_seconds, reference, warmup, integ.stats())
+    result.interrupted = interrupted
+    return result
 
 
 def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progress):
@@ -313,13 +324,30 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         budget, text = ("spp", equal_spp), f"equal samples: {equal_spp} spp per pixel per method"
     else:
         budget, text = ("frames", frames), f"{frames} frames per method"
+    interrupted_run = False
     if fan_out:
         results = _fan_out(scene, specs, base, ref, budget, warmup, workers, ray, progress)
     else:
-        results = [_run_method(scene, s, base, ref, budget, warmup, progress) for s in specs]
+        results = []
+        for s in specs:
+            try:
+                results.append(_run_method(scene, s, base, ref, budget, warmup, progress))
+            except KeyboardInterrupt:
+                if not results:
+                    raise
+                results.append(None)
+            if results[-1] is None or results[-1].interrupted:
+                break
+        results = [r for r in results if r is not None]
+        if len(results) < len(specs) or results[-1].interrupted:
+            notes.append("interrupted (Ctrl-C): " + ", ".join(
+                f"{r.label} {'stopped after ' + str(r.frames) + ' frames' if r.interrupted else 'complete'}"
+                for r in results) + "; not run: " + (", ".join(s.label for s in specs[len(results):]) or "none"))
+            interrupted_run = True
     if denoise:
         _denoise(scene, base, results, ref)
-    return Comparison(scene.name, w, h, text, warmup, ref, results, notes)
+    return Comparison(scene.name, w, h, text, warmup, ref, results, notes,
+                      interrupted=interrupted_run)
 
 
 def _denoise(scene, base: RenderConfig, results, reference: Reference):

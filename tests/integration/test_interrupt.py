@@ -7,6 +7,7 @@ import sys
 import time
 
 import numpy as np
+import pytest
 
 
 def run_and_interrupt(tmp_path, after_s, frames):
@@ -32,3 +33,29 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_finished_frames(tmp_path):
     img = np.load(out)
     assert img.shape == (32, 32, 3) and np.isfinite(img).all() and img.mean() > 0
     assert "finished frame" in err, err
+
+
+@pytest.mark.slow  # about 45 s, most of it waiting
+def test_ctrl_c_during_compare_keeps_what_finished(tmp_path):
+    """compare: Ctrl-C during the second method writes the first method's results and the second's
+    finished frames (a note says which), exit 130."""
+    import json
+
+    env = dict(os.environ, RESTIR_CPU_THREADS="2", RESTIR_CACHE=str(tmp_path / "cache"))
+    base = [sys.executable, "-m", "restir", "compare", "builtin:cornell-box", "--width", "32", "--height", "32",
+            "--reference-spp", "16", "--quiet"]
+    subprocess.run(base + ["--method", "pt", "--method", "restir-di", "--frames", "1"], check=True,
+                   capture_output=True, env=env)  # warm the kernel cache and the reference cache
+    out = tmp_path / "cmp.json"
+    p = subprocess.Popen(base + ["--method", "pt", "--method", "restir-di", "--equal-time", "20", "--json", str(out),
+                                 "--report", str(tmp_path / "rep")],
+                         stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    time.sleep(30)  # pt's 20 s are spent (after a few seconds of start-up); restir-di is rendering
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    data = json.load(open(out))
+    assert data["interrupted"] and [m["label"] for m in data["methods"]] == ["pt", "restir-di"]
+    assert data["methods"][0]["seconds"] >= 20 and data["methods"][1]["frames"] >= 1
+    assert "restir-di stopped after" in data["notes"][-1]
+    assert (tmp_path / "rep" / "index.html").is_file()
