@@ -19,6 +19,7 @@ KERNEL_MODULES = [
     "restir.integrators.restir_di.s6_shade",
     "restir_pt",
     "suffix_restir",
+    "restir.aov",
 ]
 
 
