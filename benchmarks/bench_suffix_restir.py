@@ -87,6 +87,15 @@ def query_ms(scene, size, max_depth, settings=None):
         if x[0] < 1.0e29:
             found[pixel] = nearest_prefix_ends(search, x, count).found
 
+    @wp.func
+    def holds(search: SearchStructure, n: int, x: wp.vec3) -> int:
+        """1 when box n holds x within its half-diagonal (search.consider's test), else 0."""
+        d = search.centers[n] - x
+        h = search.halves[n]
+        if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
+            return 1
+        return 0
+
     @wp.kernel
     def count_kernel(offset: int, search: SearchStructure, points: wp.array(dtype=wp.vec3),
                      visited: wp.array(dtype=int), inside: wp.array(dtype=int)):
@@ -101,18 +110,12 @@ def query_ms(scene, size, max_depth, settings=None):
                 q = wp.bvh_query_aabb(search.id, x, x)
                 while wp.bvh_query_next(q, n):
                     v += 1
-                    d = search.centers[n] - x
-                    h = search.halves[n]
-                    if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
-                        k += 1
+                    k += holds(search, n, x)
             else:
                 g = wp.hash_grid_query(search.id, x, search.radius)
                 while wp.hash_grid_query_next(g, n):
                     v += 1
-                    d = search.centers[n] - x
-                    h = search.halves[n]
-                    if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
-                        k += 1
+                    k += holds(search, n, x)
             visited[pixel] = v
             inside[pixel] = k
 

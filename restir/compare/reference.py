@@ -70,19 +70,25 @@ def path_traced_reference(scene, spp: int, config: RenderConfig, progress=None) 
     key_text = json.dumps({"scene": scene_digest(scene), "spp": per_frame, "frames": frames, "width": config.width,
                            "height": config.height, "max_depth": config.max_depth, "seed": cfg.seed,
                            "version": __version__}, sort_keys=True)
+    return _cached(key_text, lambda path: f"pt {per_frame * frames} spp ({frames} frames; cache {path})",
+                   lambda: render(scene, cfg, progress=progress).frame_images)
+
+
+def _cached(key_text: str, source, render_blocks) -> Reference:
+    """The reference keyed by `key_text` from the cache, or `render_blocks()` ((B, H, W, 3)
+    independent estimates) rendered now and stored; source(path) names it."""
     key = hashlib.sha256(key_text.encode()).hexdigest()[:24]
     path = os.path.join(cache_folder(), key + ".npz")
-    source = f"pt {per_frame * frames} spp ({frames} frames; cache {path})"
     if os.path.isfile(path):
         with np.load(path) as data:
-            return Reference(data["image"], source, data["blocks"])
-    result = render(scene, cfg, progress=progress)
-    blocks = result.frame_images.astype(np.float32)
+            return Reference(data["image"], source(path), data["blocks"])
+    blocks = np.asarray(render_blocks(), np.float32)
+    image = blocks.astype(np.float64).mean(0)
     os.makedirs(os.path.dirname(path), exist_ok=True)
     tmp = path + f".{os.getpid()}.tmp.npz"
-    np.savez_compressed(tmp, image=result.image.astype(np.float64), blocks=blocks, key=key_text)
+    np.savez_compressed(tmp, image=image, blocks=blocks, key=key_text)
     os.replace(tmp, path)  # atomic: a concurrent or interrupted run never leaves half a file
-    return Reference(result.image.astype(np.float64), source, blocks)
+    return Reference(image, source(path), blocks)
 
 
 MITSUBA_VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
@@ -118,11 +124,6 @@ def mitsuba_reference(scene, scene_file: str, defines: dict | None, spp: int, co
     per_render = max(1, spp // frames)
     key_text = json.dumps({"renderer": "mitsuba", "scene": scene_digest(scene), "params": params, "spp": per_render,
                            "renders": frames, "version": __version__}, sort_keys=True)
-    key = hashlib.sha256(key_text.encode()).hexdigest()[:24]
-    path = os.path.join(cache_folder(), key + ".npz")
-    if os.path.isfile(path):
-        with np.load(path) as data:
-            return Reference(data["image"], f"mitsuba {per_render * frames} spp (cache {path})", data["blocks"])
     # llvm_ad_rgb only where Dr.Jit is pointed at a libLLVM it supports (DRJIT_LIBLLVM_PATH: another
     # libLLVM found on the system can abort the process inside the JIT); scalar_rgb otherwise.
     # RESTIR_MITSUBA_VARIANT overrides.
@@ -132,12 +133,10 @@ def mitsuba_reference(scene, scene_file: str, defines: dict | None, spp: int, co
         mi.set_variant(variant)
     except Exception as e:
         raise ConfigError(f"--reference mitsuba: Mitsuba's variant {variant} is not usable here ({e})") from None
-    ms = mi.load_file(scene_file, **params)
-    blocks = np.stack([np.asarray(mi.render(ms, spp=per_render, seed=7000 + i), np.float64)[..., :3]
-                       for i in range(frames)]).astype(np.float32)
-    image = blocks.astype(np.float64).mean(0)
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    tmp = path + f".{os.getpid()}.tmp.npz"
-    np.savez_compressed(tmp, image=image, blocks=blocks, key=key_text)
-    os.replace(tmp, path)
-    return Reference(image, f"mitsuba {mi.variant()} {per_render * frames} spp (cache {path})", blocks)
+
+    def render_blocks():
+        ms = mi.load_file(scene_file, **params)
+        return np.stack([np.asarray(mi.render(ms, spp=per_render, seed=7000 + i), np.float64)[..., :3]
+                         for i in range(frames)])
+
+    return _cached(key_text, lambda path: f"mitsuba {variant} {per_render * frames} spp (cache {path})", render_blocks)
