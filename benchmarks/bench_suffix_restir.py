@@ -65,7 +65,8 @@ def query_ms(scene, size, max_depth, settings=None):
     from restir.integrators.common.shading import load_shading
     from restir.integrators.suffix_restir.params import SRParams
     from restir.integrators.suffix_restir.prefix import trace_prefix
-    from restir.integrators.suffix_restir.search import SearchStructure, nearest_prefix_ends
+    from restir.integrators.suffix_restir.search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_cell, grid_slot,
+                                                         nearest_prefix_ends)
     from restir.parallel import launch_pixels
 
     @wp.kernel
@@ -88,13 +89,16 @@ def query_ms(scene, size, max_depth, settings=None):
             found[pixel] = nearest_prefix_ends(search, x, count).found
 
     @wp.func
-    def holds(search: SearchStructure, n: int, x: wp.vec3) -> int:
-        """1 when box n holds x within its half-diagonal (search.consider's test), else 0."""
-        d = search.centers[n] - x
-        h = search.halves[n]
+    def holds_box(c: wp.vec3, h: float, x: wp.vec3) -> int:
+        d = c - x
         if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) <= h and wp.length_sq(d) < 3.0 * h * h:
             return 1
         return 0
+
+    @wp.func
+    def holds(search: SearchStructure, n: int, x: wp.vec3) -> int:
+        """1 when box n holds x within its half-diagonal (search.consider's test), else 0."""
+        return holds_box(search.centers[n], search.halves[n], x)
 
     @wp.kernel
     def count_kernel(offset: int, search: SearchStructure, points: wp.array(dtype=wp.vec3),
@@ -106,7 +110,18 @@ def query_ms(scene, size, max_depth, settings=None):
             n = int(0)
             v = int(0)
             k = int(0)
-            if search.kind == 1:
+            if search.kind == SEARCH_GRID:
+                lo = grid_cell(search, x - wp.vec3(search.radius))
+                hi = grid_cell(search, x + wp.vec3(search.radius))
+                for cz in range(lo[2], hi[2] + 1):  # (a slot shared by two of the cells: counted twice)
+                    for cy in range(lo[1], hi[1] + 1):
+                        for cx in range(lo[0], hi[0] + 1):
+                            slot = grid_slot(search, wp.vec3i(cx, cy, cz))
+                            run = search.ranges[slot]
+                            for i in range(run[0], run[1]):
+                                v += 1
+                                k += holds_box(search.entries[i].c, search.entries[i].h, x)
+            elif search.kind == SEARCH_BVH:
                 q = wp.bvh_query_aabb(search.id, x, x)
                 while wp.bvh_query_next(q, n):
                     v += 1
@@ -141,6 +156,12 @@ def query_ms(scene, size, max_depth, settings=None):
     visited = wp.zeros(n, dtype=int, device=integ.device)
     inside = wp.zeros(n, dtype=int, device=integ.device)
     launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)
+    wp.synchronize()
+    t = time.perf_counter()
+    for _ in range(3):
+        launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)
+    wp.synchronize()
+    query_ms.count_ms = (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
     valid = points.numpy()[:, 0] < 1.0e29
     query_ms.counts = (float(visited.numpy()[valid].mean()), float(inside.numpy()[valid].mean()))
     return ms
@@ -170,8 +191,15 @@ def phase_stages(args, out):
           + ", ".join(f"{x / y:.2f}" for x, y in ms))
     print(f"  bytes per pixel: {bpp['total']:.0f}; " + ", ".join(f"{k} {v:.0f}" for k, v in bpp.items() if k != "total"))
     print(f"  shifts {json.dumps(a.stats['shifts'])}; gather slots {a.stats['gather_slots']}")
+    # rays per pixel and frame: the work each stage does, whatever the machine
+    px = args.stage_size ** 2 * args.frames
+    rays = {k: v / px for k, v in a.stats["rays_by_stage"].items() if v}
+    pt_rays = b.stats["rays"] / px
+    print("  rays per pixel per frame: " + ", ".join(f"{k} {v:.2f}" for k, v in rays.items())
+          + f"; total {sum(rays.values()):.2f}, the path tracer {pt_rays:.2f} (ratio {sum(rays.values()) / pt_rays:.2f})")
     out["stages"] = {"stages_ms": stages, "report_stages_ms": grouped, "search_query_ms": q, "frame_ms": ms,
-                     "bytes_per_pixel": bpp, "shifts": a.stats["shifts"], "gather_slots": a.stats["gather_slots"]}
+                     "bytes_per_pixel": bpp, "shifts": a.stats["shifts"], "gather_slots": a.stats["gather_slots"],
+                     "rays_per_pixel": rays, "pt_rays_per_pixel": pt_rays}
 
 
 def phase_scaling(args, out):

@@ -44,6 +44,7 @@ class Integrator:
         self.width, self.height = cam.width, cam.height
         self.num_pixels = self.width * self.height
         self.rays = 0
+        self.stage_rays: dict[str, int] = {}  # rays traced per stage (a cost that does not depend on the machine)
         self.reverse_launch = False  # debug: slices in reverse order (see parallel.launch_pixels)
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
@@ -95,6 +96,8 @@ class Integrator:
         for i, name in enumerate((nonfinite,) + COUNTER_NAMES[1:]):
             self.counters[name] = self.counters.get(name, 0) + int(ev[i])
         self.rays += int(ev[EV_RAYS])
+        key = self.stage_prefix + stage
+        self.stage_rays[key] = self.stage_rays.get(key, 0) + int(ev[EV_RAYS])
 
     def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False) -> None:
         """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a
@@ -117,6 +120,7 @@ class Integrator:
             "stages": self.timer.summary(),
             "stage_total_ms": stage_ms,
             "rays": self.rays,
+            "rays_by_stage": dict(self.stage_rays),
             "rays_per_second": self.rays / (stage_ms / 1e3) if stage_ms > 0 else 0.0,
             "bytes_per_pixel": self.buffers.per_pixel(self.num_pixels),
             "scene_bytes": self.dscene.memory_bytes(),

@@ -21,7 +21,7 @@ from .s1_prefix import prefix_kernel
 from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
 from .s5_suffix_spatial import suffix_spatial_kernel
 from .s6_gather import GATHER_MUTATIONS, gather_kernel, make_gather
-from .search import SEARCHES, SearchStructure, boxes_kernel
+from .search import SEARCHES, GridEntry, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of a stage kernel that
 # the harness refuses unless asked; the shipped kernels are built with none of them.
@@ -46,7 +46,7 @@ class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix", "search",
               "suffix", "suffix_spatial", "gather")
-    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, suffix_kernel, suffix_spatial_kernel, gather_kernel)
+    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel, suffix_spatial_kernel, gather_kernel)
     # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
                 "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.adaptive": True, "prefix.avoid_specular_end": True,
@@ -55,7 +55,7 @@ class SuffixReSTIR(PathReuseIntegrator):
                 "suffix.spatial.rounds": 1, "suffix.spatial.neighbors": 3, "suffix.spatial.radius": "auto",
                 "gather.prefixes": 4, "gather.suffixes": 1, "gather.mis": "talbot", "gather.cap": 50.0,
                 "gather.radius": 2.0, "gather.radius_type": "raycone", "gather.fallback_radius": "auto",
-                "gather.search": "hashgrid", "gather.canonical_per_prefix": False,
+                "gather.search": "grid", "gather.canonical_per_prefix": False,
                 "debug.mutation": "none", **DI_SETTINGS}
     SETTINGS_DOC = {
         "shift": "the suffix shift: hybrid (replay to the first vertex that qualifies, then reconnect), "
@@ -90,8 +90,8 @@ class SuffixReSTIR(PathReuseIntegrator):
                                        "prefix 0 only, weighted by N",
         "gather.fallback_radius": "unfilled gather slots: random pixels in a disk of this radius; auto: 30 px at "
                                   "1080 lines scaled with the height, >= 2",
-        "gather.search": "the prefix search structure: hashgrid (wp.HashGrid over the box centres) or bvh (wp.Bvh "
-                         "over the boxes); both find the same neighbours",
+        "gather.search": "the prefix search structure: grid (a hashed grid sorted by cell), hashgrid (wp.HashGrid "
+                         "over the box centres) or bvh (wp.Bvh over the boxes); all find the same neighbours",
         "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
         **DI_SETTINGS_DOC,
     }
@@ -145,7 +145,10 @@ class SuffixReSTIR(PathReuseIntegrator):
         # the search structure: a box per pixel (centre and half-size; corners for the BVH)
         self.search = SearchStructure()
         self.search.kind = int(SEARCHES[s["gather.search"]])
-        self.search.centers = self.buffer("search.centers", wp.vec3)
+        if self.search.kind == SEARCHES["grid"]:
+            self.search.centers = wp.zeros(0, dtype=wp.vec3, device=self.device)
+        else:
+            self.search.centers = self.buffer("search.centers", wp.vec3)
         self.search.halves = self.buffer("search.halves", float)
         if self.search.kind == SEARCHES["bvh"]:
             self.lowers = self.buffer("search.lowers", wp.vec3)
@@ -153,6 +156,20 @@ class SuffixReSTIR(PathReuseIntegrator):
         else:  # no corners: empty arrays (the boxes kernel writes them only for the BVH)
             self.lowers = wp.zeros(0, dtype=wp.vec3, device=self.device)
             self.uppers = wp.zeros(0, dtype=wp.vec3, device=self.device)
+        n = self.num_pixels
+        if self.search.kind == SEARCHES["grid"]:
+            # the sort's keys and values need twice the entries (Warp's radix sort); a table of
+            # the next power of two >= half the pixel count (cells hold about 7 boxes each, so at
+            # most a quarter of its slots are taken: BENCHMARKS.md)
+            table = 1 << max(1, (n // 2 - 1).bit_length())
+            self.search.keys = self.buffer("search.grid_keys", wp.int32, 2 * n)
+            self.search.ids = self.buffer("search.grid_ids", wp.int32, 2 * n)
+            self.search.entries = self.buffer("search.grid_entries", GridEntry)
+            self.search.ranges = self.buffer("search.grid_table", wp.vec2i, table)
+            self.search.mask = table - 1
+        else:
+            for name, dtype in (("keys", wp.int32), ("ids", wp.int32), ("entries", GridEntry), ("ranges", wp.vec2i)):
+                setattr(self.search, name, wp.zeros(0, dtype=dtype, device=self.device))
         self.structure = None
         self.gather_slots = self.buffer("gather_slots", wp.vec4i)
         self.slot_counts = np.zeros(3, np.int64)  # gather slots filled by the search, by the fallback, empty
@@ -200,6 +217,9 @@ class SuffixReSTIR(PathReuseIntegrator):
                     self.structure = wp.Bvh(self.lowers, self.uppers)
                 else:
                     self.structure.rebuild()
+                self.search.id = self.structure.id
+            elif self.search.kind == SEARCHES["grid"]:
+                self.build_grid()
             else:
                 # A box holding x has its centre within its half-size of x in every axis, so the
                 # cells overlapping the cube of the largest half-size around x hold every candidate
@@ -209,7 +229,23 @@ class SuffixReSTIR(PathReuseIntegrator):
                     self.structure = wp.HashGrid(128, 128, 128, device=self.device)
                 self.structure.build(self.search.centers, radius)
                 self.search.radius = radius
-            self.search.id = self.structure.id
+                self.search.id = self.structure.id
+
+    def build_grid(self) -> None:
+        """The sorted grid (search.py): the query's half-size r (the largest box's, widened by a
+        relative 1e-5 so that rounding cannot leave a candidate's cell out) and cells of 2.02 r
+        (so [x - r, x + r] spans at most 2 cells an axis); then each box's slot, a stable sort by
+        slot, the boxes copied into that order and the table of each slot's first entry."""
+        g = self.search
+        radius = max(float(g.halves.numpy().max()), 1e-6 * self.scene_radius) * (1.0 + 1e-5)
+        g.radius = radius
+        g.inv_cell = 1.0 / (2.02 * radius)
+        sc, ends = self.dscene.scene, self.prefix_gbs.current
+        self.run_stage("search", grid_keys_kernel, [sc, ends, g], [g.keys, g.ids], new_call=False)
+        wp.utils.radix_sort_pairs(g.keys, g.ids, self.num_pixels, end_bit=g.mask.bit_length() + 1)
+        g.ranges.zero_()
+        self.run_stage("search", grid_order_kernel, [sc, ends, g, self.num_pixels], [g.entries, g.ranges],
+                       new_call=False)
 
     def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
         sc = self.dscene.scene

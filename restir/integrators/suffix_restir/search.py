@@ -1,9 +1,15 @@
 """The prefix search structure (ALGORITHMS.md 5.9; docs/suffix_restir.md): one box per pixel
 around its resampled prefix end, and the query that finds a fresh prefix end's neighbours, over
-one of two structures (the same code on the CPU and CUDA, rebuilt every frame):
+one of three structures (the same code on the CPU and CUDA, rebuilt every frame):
 
-- `hashgrid` (default): Warp's hash grid over the box centres (`wp.HashGrid`, cells as wide as
-  the largest box's half-size), queried over the cube of that half-size around the point, each
+- `grid` (default): a hashed uniform grid over the box centres, sorted by cell, with the boxes
+  copied into that order, so a query reads each cell's candidates as one contiguous run. Cells
+  are twice as wide as the largest half-size r, so the cube [x - r, x + r]^3 that holds every
+  candidate centre overlaps at most 2 x 2 x 2 cells: 8 table lookups per query, then contiguous
+  reads. (Warp's hash grid below returns candidates as pixel indices, each a random read of its
+  box: at 800x800 the query became memory-bound, BENCHMARKS.md.)
+- `hashgrid`: Warp's hash grid over the box centres (`wp.HashGrid`, cells as wide as the
+  largest box's half-size), queried over the cube of that half-size around the point, each
   candidate then tested against its own box;
 - `bvh`: Warp's BVH over the boxes (`wp.Bvh`), queried with the point's degenerate box.
 
@@ -33,16 +39,42 @@ slots_f = wp.types.vector(length=SR_MAX_GATHER_SUFFIXES, dtype=float)
 
 SEARCH_HASHGRID = wp.constant(0)
 SEARCH_BVH = wp.constant(1)
-SEARCHES = {"hashgrid": SEARCH_HASHGRID, "bvh": SEARCH_BVH}
+SEARCH_GRID = wp.constant(2)
+SEARCHES = {"grid": SEARCH_GRID, "hashgrid": SEARCH_HASHGRID, "bvh": SEARCH_BVH}
+cells8 = wp.types.vector(length=8, dtype=wp.int32)
+
+
+@wp.struct
+class GridEntry:
+    """A box in the sorted grid's order, with its pixel: one record, so that a candidate costs
+    no read elsewhere."""
+    c: wp.vec3
+    h: float
+    pixel: int
 
 
 @wp.struct
 class SearchStructure:
-    kind: int                         # SEARCH_HASHGRID or SEARCH_BVH
+    kind: int                         # SEARCH_GRID, SEARCH_HASHGRID or SEARCH_BVH
     id: wp.uint64                     # the hash grid's or the BVH's id
-    radius: float                     # hash grid: the query's half-size (the largest box's half-size)
-    centers: wp.array(dtype=wp.vec3)  # the boxes: centre and half-size
+    radius: float                     # grids: the query's half-size (the largest box's half-size)
+    centers: wp.array(dtype=wp.vec3)  # the boxes by pixel: centre (not kept for the sorted grid) and half-size
     halves: wp.array(dtype=float)
+    # the sorted grid (empty arrays for the others): 1 / cell width, the hash table's mask, the
+    # sort's slots and pixels, the entries in slot order, each slot's range of entries
+    inv_cell: float
+    mask: int
+    keys: wp.array(dtype=wp.int32)
+    ids: wp.array(dtype=wp.int32)
+    entries: wp.array(dtype=GridEntry)
+    ranges: wp.array(dtype=wp.vec2i)
+
+
+@wp.func
+def box_center(scene: SceneDevice, prefix_gb: GBuffer, pixel: int) -> wp.vec3:
+    """The centre of a pixel's box: its resampled prefix end."""
+    b = prefix_gb.bary[pixel]
+    return surface_at(scene, prefix_gb.tri[pixel], b[0], b[1], 0.0).p
 
 
 @wp.kernel(module=KERNEL_MODULE)
@@ -57,12 +89,12 @@ def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, box_half: fl
     c = far
     h = float(0.0)
     if has_prefix(r):
-        b = prefix_gb.bary[pixel]
-        c = surface_at(scene, prefix_gb.tri[pixel], b[0], b[1], 0.0).p
+        c = box_center(scene, prefix_gb, pixel)
         h = box_scale * r.footprint
         if box_half > 0.0:  # the fixed radius (gather.radius_type=fixed)
             h = box_half
-    centers[pixel] = c
+    if centers.shape[0] > 0:  # (the sorted grid keeps no centres by pixel: box_center again)
+        centers[pixel] = c
     halves[pixel] = h
     if lowers.shape[0] > 0:  # the BVH's corners (empty arrays with the hash grid)
         lowers[pixel] = c - wp.vec3(h)
@@ -90,9 +122,14 @@ def empty_slots() -> Slots:
 @wp.func
 def consider(s: Slots, n: int, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
     """s with pixel n inserted in distance order if its box holds x within the half-diagonal."""
+    return consider_box(s, n, search.centers[n], search.halves[n], x, count)
+
+
+@wp.func
+def consider_box(s: Slots, n: int, c: wp.vec3, h: float, x: wp.vec3, count: int) -> Slots:
+    """s with pixel n (box: centre c, half-size h) inserted in distance order if its box holds x
+    within the half-diagonal."""
     out = s
-    c = search.centers[n]
-    h = search.halves[n]
     d = c - x
     if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) > h:
         return out
@@ -114,7 +151,9 @@ def nearest_prefix_ends(search: SearchStructure, x: wp.vec3, count: int) -> Slot
     """The `count` pixels whose prefix-end box holds x, closest centre first (insertion sort)."""
     s = empty_slots()
     n = int(0)
-    if search.kind == SEARCH_BVH:
+    if search.kind == SEARCH_GRID:
+        s = grid_candidates(s, search, x, count)
+    elif search.kind == SEARCH_BVH:
         query = wp.bvh_query_aabb(search.id, x, x)
         while wp.bvh_query_next(query, n):
             s = consider(s, n, search, x, count)
@@ -126,3 +165,92 @@ def nearest_prefix_ends(search: SearchStructure, x: wp.vec3, count: int) -> Slot
         if s.pixel[m] != NO_PIXEL:
             s.found += 1
     return s
+
+
+# ---- the sorted grid
+
+@wp.func
+def grid_cell(search: SearchStructure, p: wp.vec3) -> wp.vec3i:
+    return wp.vec3i(int(wp.floor(p[0] * search.inv_cell)), int(wp.floor(p[1] * search.inv_cell)),
+                    int(wp.floor(p[2] * search.inv_cell)))
+
+
+@wp.func
+def grid_slot(search: SearchStructure, c: wp.vec3i) -> int:
+    """The hash table slot of cell c (cells that share a slot share its run: the box test sorts
+    them out)."""
+    h = (wp.uint32(c[0]) * wp.uint32(73856093)) ^ (wp.uint32(c[1]) * wp.uint32(19349663)) ^ (
+        wp.uint32(c[2]) * wp.uint32(83492791))
+    return int(h & wp.uint32(search.mask))
+
+
+@wp.func
+def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
+    """s with every box of the cells overlapping [x - r, x + r]^3 considered, each slot's run once
+    (two of the 8 cells can share a slot). The slots' ranges are read first, all 8 before any
+    run: independent reads the CPU can overlap."""
+    out = s
+    lo = grid_cell(search, x - wp.vec3(search.radius))
+    hi = grid_cell(search, x + wp.vec3(search.radius))
+    seen = cells8(-1)
+    visited = int(0)
+    for cz in range(lo[2], hi[2] + 1):
+        for cy in range(lo[1], hi[1] + 1):
+            for cx in range(lo[0], hi[0] + 1):
+                slot = grid_slot(search, wp.vec3i(cx, cy, cz))
+                again = bool(False)
+                for k in range(visited):
+                    if seen[k] == slot:
+                        again = True
+                if not again and visited < 8:
+                    seen[visited] = slot
+                    visited += 1
+    starts = cells8(0)
+    ends = cells8(0)
+    for k in range(visited):
+        run = search.ranges[seen[k]]
+        starts[k] = run[0]
+        ends[k] = run[1]
+    for k in range(visited):
+        for i in range(starts[k], ends[k]):
+            e = search.entries[i]
+            out = consider_box(out, e.pixel, e.c, e.h, x, count)
+    return out
+
+
+@wp.kernel(module=KERNEL_MODULE)
+def grid_keys_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search: SearchStructure,
+                     keys: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), events: wp.array(dtype=wp.vec4i)):
+    """Reads: the boxes' half-sizes, the prefix ends. Writes: each pixel's table slot (boxes without a prefix end: the slot past
+    the table, sorted last and never visited) and its pixel index, the sort's input."""
+    pixel = wp.tid() + offset
+    slot = search.mask + 1
+    if search.halves[pixel] > 0.0:
+        slot = grid_slot(search, grid_cell(search, box_center(scene, prefix_gb, pixel)))
+    keys[pixel] = slot
+    ids[pixel] = pixel
+    events[pixel] = ray_events(0)
+
+
+@wp.kernel(module=KERNEL_MODULE)
+def grid_order_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search: SearchStructure, count: int,
+                      entries: wp.array(dtype=GridEntry), ranges: wp.array(dtype=wp.vec2i),
+                      events: wp.array(dtype=wp.vec4i)):
+    """Reads: the sorted slots and pixels, the boxes' half-sizes, the prefix ends. Writes: the entries in sorted order,
+    and where a slot's run begins or ends, that bound of its range (the table was zeroed before:
+    empty slots keep the empty range)."""
+    i = wp.tid() + offset
+    n = search.ids[i]
+    e = GridEntry()
+    e.h = search.halves[n]
+    if e.h > 0.0:
+        e.c = box_center(scene, prefix_gb, n)
+    e.pixel = n
+    entries[i] = e
+    slot = search.keys[i]
+    if slot <= search.mask:
+        if i == 0 or search.keys[i - 1] != slot:
+            ranges[slot][0] = i
+        if i == count - 1 or search.keys[i + 1] != slot:
+            ranges[slot][1] = i + 1
+    events[i] = ray_events(0)
