@@ -4,6 +4,7 @@
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase scaling  # final-gather time against N, M, radius
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase grid     # the quality grid as one image, relMSE per tile
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase quality  # equal-time relMSE vs pt and restir-pt
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase search   # the three search structures' costs
 
 stages: Suffix ReSTIR with its defaults for `--frames` frames after a warm-up frame, alternating
 with the path tracer at 1 spp (A B A B), both twice; per-stage ms per frame grouped as the
@@ -21,6 +22,10 @@ suffix. Suffix ReSTIR gathers at most 8 suffixes and 16 prefixes per sample (the
 prototype's M <= 8), so a tile asking for more renders several samples per pixel (spp = count /
 limit) and says so. relMSE against the path tracer at `--ref-spp` under each tile; written as one
 EXR and PNG.
+
+search: for each image side in `--search-sizes` and each structure (grid, hashgrid, bvh), the build
+(the `search` stage's ms per frame over 2 frames) and the gather's queries timed alone, with the
+candidates a query reads and the boxes that hold its point; the structures alternate within a size.
 
 quality: 16 warm-up frames then 16 measured, relMSE per frame (frames 16..31) and accumulated,
 against the path tracer at `--ref-spp`; the path tracer and ReSTIR PT get Suffix ReSTIR's measured
@@ -156,12 +161,6 @@ def query_ms(scene, size, max_depth, settings=None):
     visited = wp.zeros(n, dtype=int, device=integ.device)
     inside = wp.zeros(n, dtype=int, device=integ.device)
     launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)
-    wp.synchronize()
-    t = time.perf_counter()
-    for _ in range(3):
-        launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)
-    wp.synchronize()
-    query_ms.count_ms = (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
     valid = points.numpy()[:, 0] < 1.0e29
     query_ms.counts = (float(visited.numpy()[valid].mean()), float(inside.numpy()[valid].mean()))
     return ms
@@ -296,19 +295,37 @@ def phase_quality(args, out):
         out[f"quality {name}"] = res
 
 
+def phase_search(args, out):
+    scene = shared("cornell-box")
+    rows = {}
+    for size in args.search_sizes:
+        for kind in ("grid", "hashgrid", "bvh"):
+            settings = {"gather.search": kind}
+            build = render(restir.load_scene(scene), "suffix-restir", 2, width=size, height=size,
+                           max_depth=args.max_depth, settings=settings).stats["stages"]["search"]["total_ms"] / 2
+            q = query_ms(scene, size, args.max_depth, settings)
+            n = 4 * size * size  # queries: one per pixel per gathered prefix (N = 4)
+            rows[f"{size} {kind}"] = {"build_ms": build, "query_ms": q, "us_per_query": 1e3 * q / n,
+                                      "candidates": query_ms.counts[0], "holding": query_ms.counts[1]}
+            print(f"  {size}x{size} {kind}: build {build:.1f} ms, queries {q:.0f} ms ({1e3 * q / n:.2f} us each), "
+                  f"{query_ms.counts[0]:.1f} candidates read, {query_ms.counts[1]:.1f} hold the point", flush=True)
+    out["search"] = rows
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "search", "all"], default="all")
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--stage-size", type=int, default=800)
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--out-dir", default="out/bench_suffix")
+    ap.add_argument("--search-sizes", type=int, nargs="+", default=[256, 512, 800])
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}
-    for phase in ("stages", "scaling", "grid", "quality"):
+    for phase in ("stages", "scaling", "grid", "quality", "search"):
         if args.phase in (phase, "all"):
             globals()[f"phase_{phase}"](args, out)
     if args.json:

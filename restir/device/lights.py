@@ -6,6 +6,7 @@ environment (constant or lat-long map, Mitsuba's mapping) is chosen with env_sel
 """
 import warp as wp
 
+from .intersect import surface_at
 from .sampling import sample_alias, sample_cdf, square_to_uniform_sphere, square_to_uniform_triangle
 from .scene_device import SceneDevice
 from .types import ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, LIGHT_ENV, PI
@@ -16,6 +17,7 @@ class LightSample:
     wi: wp.vec3      # unit direction from the shading point toward the light
     dist: float      # distance to the light point (T_MAX-like for the environment)
     p: wp.vec3       # light point (surface lights)
+    bary: wp.vec2    # its barycentrics in surface_at's convention: (tri, bary) reproduces p, n, ns exactly
     n: wp.vec3       # geometric normal at the light point
     ns: wp.vec3      # shading normal at the light point (decides the emitting side)
     tri: int         # emissive triangle, LIGHT_ENV for the environment
@@ -158,18 +160,13 @@ def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.ve
     k = sample_alias(scene.light_prob, scene.light_alias, u_sel)
     tri = int(scene.light_tri[k])
     ls.tri = tri
-    b = square_to_uniform_triangle(u)
-    i0 = 3 * tri
-    p0 = scene.positions[i0]
-    p1 = scene.positions[i0 + 1]
-    p2 = scene.positions[i0 + 2]
-    ls.p = p0 * (1.0 - b[0] - b[1]) + p1 * b[0] + p2 * b[1]
-    ls.n = wp.normalize(wp.cross(p1 - p0, p2 - p0))
-    ns = ls.n
-    if scene.tri_smooth[tri] != 0:
-        n = scene.normals[i0] * (1.0 - b[0] - b[1]) + scene.normals[i0 + 1] * b[0] + scene.normals[i0 + 2] * b[1]
-        if wp.length(n) > 0.0:
-            ns = wp.normalize(n)
+    b = square_to_uniform_triangle(u)  # weights of vertices 1 and 2
+    # the point through surface_at, so that a sample stored as (tri, bary) is this point bit for bit
+    h = surface_at(scene, tri, 1.0 - b[0] - b[1], b[0], 0.0)
+    ls.p = h.p
+    ls.bary = h.bary
+    ls.n = h.ng
+    ns = h.ns
     ls.ns = ns
     d = ls.p - x
     dist = wp.length(d)

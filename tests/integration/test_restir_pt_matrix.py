@@ -58,9 +58,9 @@ SCENES = {
 # 16-spp reference set (5.8% on every configuration whatever the method's variance).
 REFERENCE_SPP = {"veach-mis": 48}
 # Configurations whose tails need more runs than their scene's K (measured MDB at the scene's K):
-# direct=pt in the indirect room (7.3% at 64 x 16), the orbiting camera in veach-bidir (8.8% at
-# 128 x 32).
-RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384}
+# direct=pt in the indirect room (7.3% at 64 x 16), the orbiting camera in veach-bidir (ReSTIR
+# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32).
+RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384}
 
 
 def independent_runs(name, method, settings, motion, spp, seed0, runs=None):

@@ -13,7 +13,7 @@ import warp as wp
 
 from ...device.bsdf import bsdf_eval, bsdf_pdf
 from ...device.color import luminance
-from ...device.intersect import SurfaceHit, T_MAX, visible_to_light
+from ...device.intersect import SurfaceHit, T_MAX, surface_at, visible_to_light
 from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.sampling import to_local
 from ...device.scene_device import SceneDevice
@@ -24,12 +24,44 @@ from ..common.shading import Shading
 
 @wp.struct
 class DIReservoir:
-    light_y: wp.vec3    # point on the light, or unit direction toward the environment
-    light_n: wp.vec3    # geometric normal of the light triangle (area measure)
-    light_ns: wp.vec3   # shading normal there (decides the emitting side)
+    """24 bytes: a triangle sample is kept as its barycentrics (the point and its normals are
+    rebuilt by surface_at, bit for bit those the candidate was evaluated with), an environment
+    sample as its direction."""
     light_tri: int      # emissive triangle, LIGHT_ENV: environment, LIGHT_NONE: no sample
+    light_y: wp.vec3    # (bu, bv, 0): barycentrics on the triangle (surface_at's), or the unit direction
     W: float            # unbiased contribution weight, in the sample's measure
     M: float            # confidence
+
+
+@wp.struct
+class LightPoint:
+    """A reservoir's sample, decoded: the light point (or the environment direction), its
+    geometric normal (area measure) and its shading normal (decides the emitting side)."""
+    y: wp.vec3
+    n: wp.vec3
+    ns: wp.vec3
+
+
+@wp.func
+def light_point(scene: SceneDevice, r: DIReservoir) -> LightPoint:
+    lp = LightPoint()
+    if r.light_tri == LIGHT_ENV:
+        lp.y = r.light_y
+    elif r.light_tri != LIGHT_NONE:
+        h = surface_at(scene, r.light_tri, r.light_y[0], r.light_y[1], 0.0)
+        lp.y = h.p
+        lp.n = h.ng
+        lp.ns = h.ns
+    return lp
+
+
+@wp.func
+def on_triangle(tri: int, bary: wp.vec2) -> DIReservoir:
+    """A sample on emissive triangle tri at surface_at's barycentrics (no weights yet)."""
+    r = empty_reservoir()
+    r.light_tri = tri
+    r.light_y = wp.vec3(bary[0], bary[1], 0.0)
+    return r
 
 
 @wp.func
@@ -54,11 +86,11 @@ def store(chosen: DIReservoir, f: ReservoirWeights) -> DIReservoir:
 
 
 @wp.func
-def direction_to_light(r: DIReservoir, x: wp.vec3) -> wp.vec4:
+def direction_to_light(r: DIReservoir, lp: LightPoint, x: wp.vec3) -> wp.vec4:
     """(unit direction x -> y, distance); distance T_MAX for the environment."""
     if r.light_tri == LIGHT_ENV:
-        return wp.vec4(r.light_y[0], r.light_y[1], r.light_y[2], T_MAX)
-    d = r.light_y - x
+        return wp.vec4(lp.y[0], lp.y[1], lp.y[2], T_MAX)
+    d = lp.y - x
     dist = wp.length(d)
     if dist <= 0.0:
         return wp.vec4(0.0, 0.0, 1.0, 0.0)
@@ -71,7 +103,8 @@ def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> 
     """f_s * Le * G at the primary hit sh (no visibility); 0 for no sample."""
     if r.light_tri == LIGHT_NONE:
         return wp.vec3(0.0)
-    dd = direction_to_light(r, sh.hit.p)
+    lp = light_point(scene, r)
+    dd = direction_to_light(r, lp, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])
     if dd[3] <= 0.0:
         return wp.vec3(0.0)
@@ -80,17 +113,18 @@ def unshadowed_contribution(scene: SceneDevice, sh: Shading, r: DIReservoir) -> 
     if r.light_tri == LIGHT_ENV:
         Le = env_eval(scene, d)
     else:
-        Le = triangle_emission(scene, r.light_tri, r.light_ns, -d)
-        G = wp.abs(wp.dot(r.light_n, d)) / (dd[3] * dd[3])
+        Le = triangle_emission(scene, r.light_tri, lp.ns, -d)
+        G = wp.abs(wp.dot(lp.n, d)) / (dd[3] * dd[3])
     f = bsdf_eval(sh.mat, sh.wi, to_local(sh.frame, d))
     return wp.cw_mul(f, Le) * G
 
 
 @wp.func
 def light_visible(scene: SceneDevice, hit: SurfaceHit, r: DIReservoir) -> bool:
-    dd = direction_to_light(r, hit.p)
+    lp = light_point(scene, r)
+    dd = direction_to_light(r, lp, hit.p)
     is_env = wp.where(r.light_tri == LIGHT_ENV, 1, 0)
-    return visible_to_light(scene, hit.p, hit.ng, wp.vec3(dd[0], dd[1], dd[2]), r.light_y, r.light_n, is_env)
+    return visible_to_light(scene, hit.p, hit.ng, wp.vec3(dd[0], dd[1], dd[2]), lp.y, lp.n, is_env)
 
 
 @wp.func
@@ -128,7 +162,8 @@ def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bs
     """(p_L(y), p_B(y)): the densities with which light sampling and BSDF sampling at sh produce
     r's sample y, both in y's measure (area on a triangle, solid angle toward the environment).
     p_B omits V(x, y); why that is sound only with visibility-aware reuse: docs/restir_di.md."""
-    dd = direction_to_light(r, sh.hit.p)
+    lp = light_point(scene, r)
+    dd = direction_to_light(r, lp, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])
     if r.light_tri == LIGHT_NONE or dd[3] <= 0.0:
         return wp.vec2(0.0, 0.0)
@@ -138,7 +173,7 @@ def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bs
         p_L = env_pdf(scene, d)
     else:
         p_L = (1.0 - scene.env_select_prob) * scene.tri_light_pdf[r.light_tri]
-        to_measure = wp.abs(wp.dot(r.light_n, d)) / (dd[3] * dd[3])
+        to_measure = wp.abs(wp.dot(lp.n, d)) / (dd[3] * dd[3])
     p_B = float(0.0)
     if with_bsdf != 0:
         p_B = bsdf_pdf(sh.mat, sh.wi, to_local(sh.frame, d)) * to_measure

@@ -30,7 +30,8 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import Shading, load_shading
 from .params import DIParams
-from .reservoir import DIReservoir, candidate_densities, empty_reservoir, store, unshadowed_contribution
+from .reservoir import (DIReservoir, candidate_densities, empty_reservoir, on_triangle, store,
+                        unshadowed_contribution)
 
 
 @wp.func
@@ -38,13 +39,11 @@ def light_candidate(scene: SceneDevice, sh: Shading, u_sel: float, u: wp.vec2) -
     cand = empty_reservoir()
     ls = sample_light(scene, sh.hit.p, u_sel, u)
     if ls.pdf > 0.0:
-        cand.light_tri = ls.tri
         if ls.is_env != 0:
+            cand.light_tri = LIGHT_ENV
             cand.light_y = ls.wi
         else:
-            cand.light_y = ls.p
-            cand.light_n = ls.n
-            cand.light_ns = ls.ns
+            cand = on_triangle(ls.tri, ls.bary)
     return cand
 
 
@@ -66,10 +65,7 @@ def light_point_along(scene: SceneDevice, sh: Shading, d: wp.vec3) -> DIReservoi
     h = trace_closest(scene, offset_origin(sh.hit.p, sh.hit.ng, d), d, T_MAX)
     if h.valid != 0:
         if scene.tri_light_pdf[h.tri] > 0.0:
-            cand.light_tri = h.tri
-            cand.light_y = h.p
-            cand.light_n = h.ng
-            cand.light_ns = h.ns
+            cand = on_triangle(h.tri, h.bary)
     elif scene.env_kind != ENV_NONE:
         cand.light_tri = LIGHT_ENV
         cand.light_y = d
