@@ -43,7 +43,6 @@ class Integrator:
         cam = dscene.host.camera
         self.width, self.height = cam.width, cam.height
         self.num_pixels = self.width * self.height
-        self.rays = 0
         self.stage_rays: dict[str, int] = {}  # rays traced per stage (a cost that does not depend on the machine)
         self.reverse_launch = False  # debug: slices in reverse order (see parallel.launch_pixels)
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
@@ -95,9 +94,13 @@ class Integrator:
         ev = self.events.numpy().sum(axis=0, dtype=np.int64)
         for i, name in enumerate((nonfinite,) + COUNTER_NAMES[1:]):
             self.counters[name] = self.counters.get(name, 0) + int(ev[i])
-        self.rays += int(ev[EV_RAYS])
         key = self.stage_prefix + stage
         self.stage_rays[key] = self.stage_rays.get(key, 0) + int(ev[EV_RAYS])
+
+    @property
+    def rays(self) -> int:
+        """Rays traced so far, over every stage (a component's too: it shares stage_rays)."""
+        return sum(self.stage_rays.values())
 
     def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False) -> None:
         """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a

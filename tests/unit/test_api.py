@@ -94,3 +94,14 @@ def test_readme_example_runs(tmp_path, monkeypatch):
     exec(compile(block, "README.md", "exec"), env)
     assert env["result"].image.shape == (64, 64, 3) and (tmp_path / "cornell-box.exr").exists()
     assert env["di"].stats["method"] == "restir-di"
+
+
+def test_rays_are_counted_per_stage_with_the_direct_light_component():
+    """stats["rays"] is the sum of stats["rays_by_stage"], and a method with ReSTIR DI for direct
+    light counts the component's rays (its stages "di.*") among its own."""
+    scene = restir.load_scene("builtin:cornell-box", width=16, height=16)
+    r = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=1, frames=1, max_depth=3))
+    by_stage = r.stats["rays_by_stage"]
+    assert sum(by_stage.values()) == r.stats["rays"]
+    assert by_stage["gbuffer"] == 16 * 16  # one primary ray per pixel
+    assert by_stage["di.initial"] > 0 and by_stage["trace_initial"] > 0

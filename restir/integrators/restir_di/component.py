@@ -44,6 +44,7 @@ def attach_direct_light(integ) -> ReSTIRDI | None:
     di.timer = integ.timer
     di.counters = integ.counters
     di.events = integ.events
+    di.stage_rays = integ.stage_rays  # its rays count in the method's (stats "rays", "rays_by_stage")
     del di.buffers.bytes["events"]
     integ.buffers.bytes.update({f"di.{k}": v for k, v in di.buffers.bytes.items()})
     return di

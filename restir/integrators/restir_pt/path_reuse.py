@@ -162,10 +162,8 @@ class PathReuseIntegrator(Integrator):
         reservoirs, the G-buffers and ReSTIR DI's)."""
 
     def stats(self) -> dict:
-        """The base stats, ReSTIR DI's rays, and the reuse diagnostics (TESTING.md 5.12): the shifts
-        per pass and the reuse-dead passes."""
+        """The base stats (ReSTIR DI's rays among them: the component shares stage_rays) and the
+        reuse diagnostics (TESTING.md 5.12): the shifts per pass and the reuse-dead passes."""
         out = super().stats()
-        if self.di is not None:
-            out["rays"] += self.di.rays
         out["shifts"], out["reuse_dead"] = summarize_shifts(self.shift_counts)
         return out
