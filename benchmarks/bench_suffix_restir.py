@@ -275,6 +275,7 @@ def phase_quality(args, out):
     scenes = {"indirect-room": "builtin:indirect-room", "veach-bidir": shared("veach-bidir")}
     for name, spec in scenes.items():
         et = EqualTime(args, spec)
+        render(et.scene, "suffix-restir", 1, **et.common)  # compile, warm up
         a = render(et.scene, "suffix-restir", WARM + MEAS, **et.common)
         target = a.stats["ms_per_frame"]
         spp = max(1, int(round((target - et.fixed) / et.slope)))
