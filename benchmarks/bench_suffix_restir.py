@@ -5,6 +5,7 @@
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase grid     # the quality grid as one image, relMSE per tile
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase quality  # equal-time relMSE vs pt and restir-pt
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase search   # the three search structures' costs
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase samples  # equal-sample relMSE: where the error is
 
 stages: Suffix ReSTIR with its defaults for `--frames` frames after a warm-up frame, alternating
 with the path tracer at 1 spp (A B A B), both twice; per-stage ms per frame grouped as the
@@ -26,6 +27,11 @@ EXR and PNG.
 search: for each image side in `--search-sizes` and each structure (grid, hashgrid, bvh), the build
 (the `search` stage's ms per frame over 2 frames) and the gather's queries timed alone, with the
 candidates a query reads and the boxes that hold its point; the structures alternate within a size.
+
+samples: at `--samples-size` on the indirect room, 24 frames of 1 sample per pixel each for the path
+tracer, ReSTIR PT and Suffix ReSTIR in four configurations; relMSE per frame over frames 8..23
+against the path tracer at 1024 spp, the share of it in the 10 worst pixels of each frame, and the
+relMSE without them (is the error in a few fireflies or everywhere?).
 
 quality: 16 warm-up frames then 16 measured, relMSE per frame (frames 16..31) and accumulated,
 against the path tracer at `--ref-spp`; the path tracer and ReSTIR PT get Suffix ReSTIR's measured
@@ -313,20 +319,45 @@ def phase_search(args, out):
     out["search"] = rows
 
 
+def phase_samples(args, out):
+    scene = restir.load_scene("builtin:indirect-room")
+    common = dict(max_depth=args.max_depth, keep_frames=True, width=args.samples_size, height=args.samples_size)
+    ref = render(scene, "pt", 1, seed=99, spp=1024, **common).image.astype(np.float64)
+    no_reuse = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
+    rows = {}
+    for label, method, settings in [("pt", "pt", {}), ("restir-pt", "restir-pt", {}),
+                                    ("suffix-restir", "suffix-restir", {}),
+                                    ("suffix-restir, gather only", "suffix-restir", no_reuse),
+                                    ("suffix-restir, N = 1", "suffix-restir", {"gather.prefixes": 1}),
+                                    ("suffix-restir, canonical per prefix", "suffix-restir",
+                                     {"gather.canonical_per_prefix": True})]:
+        f = render(scene, method, 24, settings=settings, **common).frame_images[8:].astype(np.float64)
+        err = np.array([((x - ref) ** 2 / (ref ** 2 + 0.01)).mean(-1).ravel() for x in f])  # frames x pixels
+        worst = -np.sort(-err, axis=1)
+        rows[label] = {"relmse_frame": float(err.mean()),
+                       "worst10_share": float((worst[:, :10].sum(1) / worst.sum(1)).mean()),
+                       "relmse_without_worst10": float(worst[:, 10:].sum(1).mean() / err.shape[1])}
+        print(f"  {label}: relMSE per frame {rows[label]['relmse_frame']:.4f}, the 10 worst pixels "
+              f"{rows[label]['worst10_share']:.2f} of it, without them {rows[label]['relmse_without_worst10']:.4f}",
+              flush=True)
+    out["samples"] = rows
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "search", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "search", "samples", "all"], default="all")
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--stage-size", type=int, default=800)
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--out-dir", default="out/bench_suffix")
+    ap.add_argument("--samples-size", type=int, default=96)
     ap.add_argument("--search-sizes", type=int, nargs="+", default=[256, 512, 800])
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}
-    for phase in ("stages", "scaling", "grid", "quality", "search"):
+    for phase in ("stages", "scaling", "grid", "quality", "search", "samples"):
         if args.phase in (phase, "all"):
             globals()[f"phase_{phase}"](args, out)
     if args.json:
