@@ -166,15 +166,14 @@ def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.ve
     ls.p = h.p
     ls.bary = h.bary
     ls.n = h.ng
-    ns = h.ns
-    ls.ns = ns
+    ls.ns = h.ns
     d = ls.p - x
     dist = wp.length(d)
     if dist <= 0.0:
         return ls
     ls.wi = d / dist
     ls.dist = dist
-    ls.Le = triangle_emission(scene, tri, ns, -ls.wi)
+    ls.Le = triangle_emission(scene, tri, ls.ns, -ls.wi)
     ls.pdf = triangle_light_pdf(scene, tri, ls.n, ls.wi, dist)
     return ls
 

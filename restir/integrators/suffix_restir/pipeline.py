@@ -46,7 +46,8 @@ class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix", "search",
               "suffix", "suffix_spatial", "gather")
-    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel, suffix_spatial_kernel, gather_kernel)
+    KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel,
+               suffix_spatial_kernel, gather_kernel)
     # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
     SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
                 "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.adaptive": True, "prefix.avoid_specular_end": True,
@@ -145,10 +146,6 @@ class SuffixReSTIR(PathReuseIntegrator):
         # the search structure: a box per pixel (centre and half-size; corners for the BVH)
         self.search = SearchStructure()
         self.search.kind = int(SEARCHES[s["gather.search"]])
-        if self.search.kind == SEARCHES["grid"]:
-            self.search.centers = wp.zeros(0, dtype=wp.vec3, device=self.device)
-        else:
-            self.search.centers = self.buffer("search.centers", wp.vec3)
         self.search.halves = self.buffer("search.halves", float)
         if self.search.kind == SEARCHES["bvh"]:
             self.lowers = self.buffer("search.lowers", wp.vec3)
@@ -158,16 +155,19 @@ class SuffixReSTIR(PathReuseIntegrator):
             self.uppers = wp.zeros(0, dtype=wp.vec3, device=self.device)
         n = self.num_pixels
         if self.search.kind == SEARCHES["grid"]:
-            # the sort's keys and values need twice the entries (Warp's radix sort); a table of
-            # the next power of two >= half the pixel count (cells hold about 7 boxes each, so at
-            # most a quarter of its slots are taken: BENCHMARKS.md)
+            # no centres by pixel (the grid's kernels rebuild them from the prefix ends); the
+            # sort's keys and values need twice the entries (Warp's radix sort); a table of the
+            # next power of two >= half the pixel count (cells hold about 7 boxes each at 800x800, so
+            # under a third of its slots are taken: BENCHMARKS.md)
             table = 1 << max(1, (n // 2 - 1).bit_length())
+            self.search.centers = wp.zeros(0, dtype=wp.vec3, device=self.device)
             self.search.keys = self.buffer("search.grid_keys", wp.int32, 2 * n)
             self.search.ids = self.buffer("search.grid_ids", wp.int32, 2 * n)
             self.search.entries = self.buffer("search.grid_entries", GridEntry)
             self.search.ranges = self.buffer("search.grid_table", wp.vec2i, table)
             self.search.mask = table - 1
         else:
+            self.search.centers = self.buffer("search.centers", wp.vec3)
             for name, dtype in (("keys", wp.int32), ("ids", wp.int32), ("entries", GridEntry), ("ranges", wp.vec2i)):
                 setattr(self.search, name, wp.zeros(0, dtype=dtype, device=self.device))
         self.structure = None
@@ -235,7 +235,7 @@ class SuffixReSTIR(PathReuseIntegrator):
         """The sorted grid (search.py): the query's half-size r (the largest box's, widened by a
         relative 1e-5 so that rounding cannot leave a candidate's cell out) and cells of 2.02 r
         (so [x - r, x + r] spans at most 2 cells an axis); then each box's slot, a stable sort by
-        slot, the boxes copied into that order and the table of each slot's first entry."""
+        slot, the boxes copied into that order and the table of each slot's range of entries."""
         g = self.search
         radius = max(float(g.halves.numpy().max()), 1e-6 * self.scene_radius) * (1.0 + 1e-5)
         g.radius = radius

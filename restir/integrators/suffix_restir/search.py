@@ -184,34 +184,48 @@ def grid_slot(search: SearchStructure, c: wp.vec3i) -> int:
     return int(h & wp.uint32(search.mask))
 
 
+@wp.struct
+class GridSlots:
+    """The distinct table slots of the cells overlapping [x - r, x + r]^3 (at most 2 x 2 x 2:
+    cells are 2.02 r wide), and how many."""
+    slot: cells8
+    count: int
+
+
 @wp.func
-def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
-    """s with every box of the cells overlapping [x - r, x + r]^3 considered, each slot's run once
-    (two of the 8 cells can share a slot). The slots' ranges are read first, all 8 before any
-    run: independent reads the CPU can overlap."""
-    out = s
+def grid_slots(search: SearchStructure, x: wp.vec3) -> GridSlots:
+    """The slots a query at x reads, each once (two cells can share a slot)."""
+    out = GridSlots()
+    out.slot = cells8(-1)
     lo = grid_cell(search, x - wp.vec3(search.radius))
     hi = grid_cell(search, x + wp.vec3(search.radius))
-    seen = cells8(-1)
-    visited = int(0)
     for cz in range(lo[2], hi[2] + 1):
         for cy in range(lo[1], hi[1] + 1):
             for cx in range(lo[0], hi[0] + 1):
                 slot = grid_slot(search, wp.vec3i(cx, cy, cz))
                 again = bool(False)
-                for k in range(visited):
-                    if seen[k] == slot:
+                for k in range(out.count):
+                    if out.slot[k] == slot:
                         again = True
-                if not again and visited < 8:
-                    seen[visited] = slot
-                    visited += 1
+                if not again and out.count < 8:
+                    out.slot[out.count] = slot
+                    out.count += 1
+    return out
+
+
+@wp.func
+def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
+    """s with every box of the slots of x considered. The slots' ranges are read first, all of
+    them before any run: independent reads the CPU can overlap."""
+    out = s
+    g = grid_slots(search, x)
     starts = cells8(0)
     ends = cells8(0)
-    for k in range(visited):
-        run = search.ranges[seen[k]]
+    for k in range(g.count):
+        run = search.ranges[g.slot[k]]
         starts[k] = run[0]
         ends[k] = run[1]
-    for k in range(visited):
+    for k in range(g.count):
         for i in range(starts[k], ends[k]):
             e = search.entries[i]
             out = consider_box(out, e.pixel, e.c, e.h, x, count)
