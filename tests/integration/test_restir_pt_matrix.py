@@ -15,6 +15,7 @@ Scenes: the glossy Cornell box, veach-bidir and veach-mis (shared scenes), the e
 sphere (A1) and the indirect room (light hidden from the camera, glossy surfaces).
 """
 import functools
+import os
 
 import pytest
 
@@ -67,7 +68,11 @@ def independent_runs(name, method, settings, motion, spp, seed0, runs=None):
     load, depth, _, scene_runs, frames = SCENES[name]
     cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=SIZE, height=SIZE, max_depth=depth,
                               settings=settings, camera_motion=motion, camera_speed=CAMERA_SPEED[motion])
-    return IndependentRuns(load(), cfg, runs or scene_runs, seed0)
+    # RESTIR_TEST_WORKERS=n: the runs on n local processes (bitwise the same images; with
+    # RESTIR_CPU_THREADS=1 this keeps n cores busy on 32x32 frames, where one process's launches
+    # are bound by Python's per-launch overhead)
+    workers = int(os.environ.get("RESTIR_TEST_WORKERS", "1"))
+    return IndependentRuns(load(), cfg, runs or scene_runs, seed0, workers=workers)
 
 
 @functools.lru_cache(maxsize=None)
