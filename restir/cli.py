@@ -178,10 +178,16 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--report", metavar="DIR", help="write the HTML report (opens offline) into this folder")
     c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
-    _fanout_options(c, default_workers=None, what="the methods (equal samples or frames; equal time renders "
-                    "them one after another)")
-    c.add_argument("--denoise", action="store_true", help="also denoise each method's last frame with Open Image "
-                   "Denoise (albedo and normal AOVs; needs restir[denoise]) and show it in the report")
+    _fanout_options(c, default_workers=None, what="the correlation runs, and the methods at equal samples or "
+                    "frames (equal time renders them one after another)")
+    c.add_argument("--denoise", action="store_true", help="also denoise the frames after the warm-up (all, or an "
+                   "evenly spaced subset of 9-16) and the last frame with Open Image Denoise (albedo and normal "
+                   "guides; needs restir[denoise]): per-frame denoised relMSE and FLIP, the images in the report")
+    c.add_argument("--correlation-runs", type=int, default=8, metavar="K",
+                   help="independent runs (warmup + 1 frames each) per method for the radial correlation; 0: none")
+    c.add_argument("--no-frame-time-match", dest="match_frame_time", action="store_false",
+                   help="at equal time, do not also render the path tracer at each other method's frame time "
+                        "(the per-frame baseline of the headline)")
     c.add_argument("--tev", nargs="?", const="127.0.0.1:14158", metavar="HOST:PORT",
                    help="also send the reference and every method's image to a running tev (needs restir[tev])")
 
@@ -513,11 +519,45 @@ def _validate(args) -> int:
     return {"pass": 0, "fail": 1, "inconclusive": 3}[result.verdict]
 
 
+def _compare_tables(result, denoised: bool) -> list:
+    """The terminal's tables: the error, and the error's structure (what a denoiser sees)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    from .compare.structure import BLOCK_SIZES, TABLE_RADII
+
+    def num(v, spec="{:.4g}"):
+        return "-" if v is None else spec.format(v)
+
+    errors = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "
+                         f"{result.reference.source}")
+    cols = ["method", "frames", "ms/frame", "relMSE per frame", "relMSE accumulated", "MAPE", "FLIP", "mean ratio (z)"]
+    cols += ["denoised relMSE per frame", "denoised FLIP per frame"] if denoised else []
+    for col in cols:
+        errors.add_column(col, justify="left" if col == "method" else "right")
+    shape = Table(title="error structure: correlation factor at block size B (1: independent pixels, B^2: "
+                        "constant over blocks), radial correlation at r px (0: none), temporal correlation")
+    for col in ["method"] + [f"factor B={b}" for b in BLOCK_SIZES] + [f"radial r={r}" for r in TABLE_RADII] \
+            + ["temporal"]:
+        shape.add_column(col, justify="left" if col == "method" else "right")
+    for m in result.methods:
+        x = m.metrics
+        z = f" ({x['mean_z']:+.2f})" if x["mean_z"] is not None else ""
+        errors.add_row(escape(m.label), str(m.frames), f"{x['ms_per_frame']:.1f}", num(x["relmse_frame"]),
+                       num(x["relmse_accumulated"]), num(x["mape"]), num(x["flip"], "{:.4f}"),
+                       f"{x['mean_ratio']:.4f}{z}",
+                       *([num(x.get("relmse_denoised_frame")), num(x.get("flip_denoised_frame"), "{:.4f}")]
+                         if denoised else []))
+        radial = dict(zip(m.radial["radii"], m.radial["values"])) if m.radial else {}
+        shape.add_row(escape(m.label), *[num(x["correlation_factor"][str(b)], "{:.2f}") for b in BLOCK_SIZES],
+                      *[num(radial.get(r), "{:.3f}") for r in TABLE_RADII], num(x["temporal_correlation"], "{:.3f}"))
+    return [errors, shape]
+
+
 def _compare(args) -> int:
     from rich.console import Console
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TimeElapsedColumn
-    from rich.table import Table
 
     from .compare import MethodSpec, compare
 
@@ -550,22 +590,15 @@ def _compare(args) -> int:
                          warmup=args.warmup, seed=args.seed, width=args.width, height=args.height,
                          max_depth=args.max_depth, device=args.device, progress=progress,
                          workers=args.workers, ray=args.ray, denoise=args.denoise, scene_file=args.scene,
-                         defines=dict(args.defines))
+                         defines=dict(args.defines), correlation_runs=args.correlation_runs,
+                         match_frame_time=args.match_frame_time)
     for note in result.notes:
         console.print(f"note: {escape(note)}", highlight=False, soft_wrap=True)
-    table = Table(title=f"{result.scene} {result.width}x{result.height}, {result.budget}; reference: "
-                        f"{result.reference.source}")
-    for col in ("method", "frames", "ms/frame", "relMSE per frame", "relMSE accumulated", "MAPE", "FLIP",
-                "mean ratio (z)") + (("denoised frame relMSE",) if args.denoise else ()):
-        table.add_column(col, justify="left" if col == "method" else "right")
-    for m in result.methods:
-        x = m.metrics
-        z = f" ({x['mean_z']:+.2f})" if x["mean_z"] is not None else ""
-        table.add_row(escape(m.label), str(m.frames), f"{x['ms_per_frame']:.1f}", f"{x['relmse_frame']:.4g}",
-                      f"{x['relmse_accumulated']:.4g}", f"{x['mape']:.4g}",
-                      "-" if x["flip"] is None else f"{x['flip']:.4f}", f"{x['mean_ratio']:.4f}{z}",
-                      *([f"{x['relmse_denoised_frame']:.4g}"] if args.denoise else []))
-    Console(width=None if sys.stdout.isatty() else 200).print(table)
+    out = Console(width=None if sys.stdout.isatty() else 200)
+    for table in _compare_tables(result, args.denoise):
+        out.print(table)
+    for line in result.headline:
+        out.print(escape(line["text"]), highlight=False, soft_wrap=True)
     if tev is not None:
         from .viewer import send_to_tev
 

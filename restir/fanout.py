@@ -46,8 +46,19 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def run_tasks(tasks, workers: int | None = None, ray: str | None = None, progress=None) -> list:
-    """Run `render_task(scene, config)` for each (scene, config) in `tasks`; results in task order.
+def last_frame_task(scene, config):
+    """One render's last frame alone (H, W, 3): what the error-structure runs of `compare` need,
+    without sending every frame back."""
+    import dataclasses
+
+    from .api import render
+
+    return render(scene, dataclasses.replace(config, keep_frames=True)).frame_images[-1]
+
+
+def run_tasks(tasks, workers: int | None = None, ray: str | None = None, progress=None, task=render_task) -> list:
+    """Run `task(scene, config)` (a top-level function, so that it pickles; default
+    `render_task`) for each (scene, config) in `tasks`; results in task order.
 
     ray: None for local execution; "auto" (or an address such as "ray://head:10001") to join a
     running Ray cluster; "local" to start a private one on this machine. workers: local processes
@@ -55,21 +66,21 @@ def run_tasks(tasks, workers: int | None = None, ray: str | None = None, progres
     """
     tasks = list(tasks)
     if ray is not None:
-        return _run_on_ray(tasks, ray, progress)
+        return _run_on_ray(tasks, ray, progress, task)
     workers = workers or default_workers()
     if workers < 1:
         raise ConfigError("--workers must be >= 1")
     results = [None] * len(tasks)
     if workers == 1 or len(tasks) <= 1:
         for i, (scene, config) in enumerate(tasks):
-            results[i] = render_task(scene, config)
+            results[i] = task(scene, config)
             if progress:
                 progress(i + 1, len(tasks))
         return results
     warm_kernels(tasks)
     # spawn, not fork: Warp and Embree hold native state that a forked child must not share
     with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=mp.get_context("spawn")) as pool:
-        futures = {pool.submit(render_task, scene, config): i for i, (scene, config) in enumerate(tasks)}
+        futures = {pool.submit(task, scene, config): i for i, (scene, config) in enumerate(tasks)}
         for done, fut in enumerate(cf.as_completed(futures), start=1):
             results[futures[fut]] = fut.result()
             if progress:
@@ -77,7 +88,7 @@ def run_tasks(tasks, workers: int | None = None, ray: str | None = None, progres
     return results
 
 
-def _run_on_ray(tasks, address: str, progress) -> list:
+def _run_on_ray(tasks, address: str, progress, task=render_task) -> list:
     try:
         import ray
     except ImportError:
@@ -87,7 +98,7 @@ def _run_on_ray(tasks, address: str, progress) -> list:
             ray.init(include_dashboard=False, log_to_driver=False)
         else:
             ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(render_task)
+    remote = ray.remote(num_cpus=1)(task)
     refs = [remote.remote(scene, config) for scene, config in tasks]
     index = {r: i for i, r in enumerate(refs)}
     results = [None] * len(refs)

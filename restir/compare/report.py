@@ -12,6 +12,8 @@ import os
 
 import numpy as np
 
+from .structure import BLOCK_SIZES, TABLE_RADII
+
 
 _VIEWER_JS = r"""
 const D = RESTIR_DATA;
@@ -32,7 +34,15 @@ function decode(b64) {
 }
 const IMAGES = D.images.map(im => ({label: im.label, rgb: decode(im.data)}));
 const REF = IMAGES[0].rgb;
-const view = {index: Math.min(1, IMAGES.length - 1), error: false, exposure: 0, scale: 1, x: 0, y: 0};
+// D.methods[i].views: the image index of each kind shown ('accumulated', 'frame', 'denoised');
+// method 0 is the reference (one image for every kind)
+const KINDS = {accumulated: 'accumulated', frame: 'last frame', denoised: 'last frame denoised'};
+const view = {method: Math.min(1, D.methods.length - 1), kind: 'accumulated', index: 0, error: false, exposure: 0,
+              scale: 1, x: 0, y: 0};
+function imageOf(method, kind) {
+  const v = D.methods[method].views;
+  return v[kind] !== undefined && v[kind] !== null ? v[kind] : v.accumulated;
+}
 function srgb(v) { v = Math.max(0, Math.min(1, v)); return v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055; }
 function ramp(t) {  // a perceptual dark-to-bright ramp (black, purple, orange, yellow) for the error view
   t = Math.max(0, Math.min(1, t));
@@ -76,13 +86,16 @@ function draw(canvas, index) {
   ctx.drawImage(source(index, view.error && index !== 0), 0, 0);
 }
 function render() {
+  view.index = imageOf(view.method, view.kind);
   draw(document.getElementById('main'), view.index);
   document.querySelectorAll('canvas.crop').forEach(c => draw(c, +c.dataset.index));
-  document.querySelectorAll('.method').forEach(b => b.classList.toggle('active', +b.dataset.index === view.index));
+  document.querySelectorAll('.method').forEach(b => b.classList.toggle('active', +b.dataset.method === view.method));
+  document.querySelectorAll('input[name=kind]').forEach(r => { r.checked = r.value === view.kind; });
   document.getElementById('shown').textContent = IMAGES[view.index].label + (view.error && view.index ? ' (relative error)' : '');
   document.getElementById('zoom').textContent = view.scale.toFixed(2) + 'x';
 }
-function show(i) { if (i >= 0 && i < IMAGES.length) { view.index = i; render(); } }
+function show(i) { if (i >= 0 && i < D.methods.length) { view.method = i; render(); } }
+function showKind(k) { if (k in KINDS && (k !== 'denoised' || D.denoised)) { view.kind = k; render(); } }
 function zoomAt(factor, u, v) {  // u, v: image coordinates kept under the cursor
   const s = Math.max(1, Math.min(64, view.scale * factor));
   view.x = u - (u - view.x) * view.scale / s; view.y = v - (v - view.y) * view.scale / s; view.scale = s;
@@ -111,9 +124,10 @@ window.addEventListener('load', () => {
     clampView(); render();
   });
   document.querySelectorAll('.method').forEach(b => {
-    b.addEventListener('mouseenter', () => show(+b.dataset.index));
-    b.addEventListener('click', () => show(+b.dataset.index));
+    b.addEventListener('mouseenter', () => show(+b.dataset.method));
+    b.addEventListener('click', () => show(+b.dataset.method));
   });
+  document.querySelectorAll('input[name=kind]').forEach(r => r.addEventListener('change', () => showKind(r.value)));
   document.getElementById('exposure').addEventListener('input', e => {
     view.exposure = parseFloat(e.target.value); document.getElementById('ev').textContent = view.exposure.toFixed(1); render();
   });
@@ -121,6 +135,9 @@ window.addEventListener('load', () => {
   document.getElementById('errview').addEventListener('change', e => { view.error = e.target.checked; render(); });
   window.addEventListener('keydown', e => {
     if (e.key >= '0' && e.key <= '9') show(+e.key);
+    else if (e.key === 'a') showKind('accumulated');
+    else if (e.key === 'f') showKind('frame');
+    else if (e.key === 'd') showKind(view.kind === 'denoised' ? 'frame' : 'denoised');
     else if (e.key === 'e') { view.error = !view.error; document.getElementById('errview').checked = view.error; render(); }
     else if (e.key === '+' || e.key === '=') zoomAt(1.25, view.x + W / view.scale / 2, view.y + H / view.scale / 2);
     else if (e.key === '-') zoomAt(0.8, view.x + W / view.scale / 2, view.y + H / view.scale / 2);
@@ -138,8 +155,9 @@ h1 { font-size: 20px; } h2 { font-size: 16px; margin-top: 28px; }
 #main { border: 1px solid #888; cursor: grab; image-rendering: pixelated; }
 .method { display: block; width: 100%; text-align: left; margin: 2px 0; padding: 4px 8px; border: 1px solid #bbb; background: #fff; cursor: pointer; }
 .method.active { background: #2a6; color: #fff; }
-#crops { display: flex; flex-wrap: wrap; gap: 8px; margin-top: 12px; }
+#crops { margin-top: 12px; } .crow { display: flex; gap: 8px; margin-bottom: 8px; }
 #crops figure { margin: 0; font-size: 12px; } canvas.crop { border: 1px solid #aaa; image-rendering: pixelated; }
+.headline { font-size: 14px; margin: 4px 0; }
 table { border-collapse: collapse; font-size: 13px; } td, th { border: 1px solid #ccc; padding: 3px 8px; text-align: right; }
 td:first-child, th:first-child { text-align: left; }
 .note { color: #555; font-size: 13px; }
@@ -180,6 +198,18 @@ def _plots(result):
     fig.update_yaxes(type="log", title="relMSE of the frame")
     fig.update_layout(title="per-frame relMSE")
     out.append(fig_html(fig, "plot-per-frame"))
+    radial = [m for m in result.methods if m.radial]
+    if radial:
+        fig = go.Figure()
+        for m in radial:
+            fig.add_trace(go.Scatter(x=m.radial["radii"], y=m.radial["values"], mode="lines+markers", name=m.label,
+                                     error_y=dict(type="data", array=m.radial["standard_errors"], visible=True)))
+        fig.update_xaxes(title="radius r (pixels, square ring)")
+        fig.update_yaxes(title="correlation")
+        first = radial[0].radial
+        fig.update_layout(title=f"radial correlation of the error ({first['runs']} independent runs at frame "
+                                f"{first['frame']}; bars: the standard error under independence)")
+        out.append(fig_html(fig, "plot-radial"))
     stages = []
     for m in result.methods:
         stages += [s for s in m.stats.get("stages", {}) if s not in stages]
@@ -210,9 +240,17 @@ def write_report(result, folder: str) -> str:
     from ..image_io import write_exr
 
     os.makedirs(folder, exist_ok=True)
-    images = [("reference", result.reference.image)] + [(m.label, m.image) for m in result.methods]
-    images += [(f"{m.label}: last frame denoised", m.denoised) for m in result.methods if m.denoised is not None]
-    data = {"width": result.width, "height": result.height,
+    images, methods = [("reference", result.reference.image)], [{"label": "reference", "views": {"accumulated": 0}}]
+    for m in result.methods:
+        views = {}
+        for kind, img, label in (("accumulated", m.image, m.label), ("frame", m.last_frame, f"{m.label}: last frame"),
+                                 ("denoised", m.denoised, f"{m.label}: last frame denoised")):
+            if img is not None:
+                views[kind] = len(images)
+                images.append((label, img))
+        methods.append({"label": m.label, "views": views})
+    denoised = any(m.denoised is not None for m in result.methods)
+    data = {"width": result.width, "height": result.height, "methods": methods, "denoised": denoised,
             "images": [{"label": label, "data": _encode(img)} for label, img in images]}
     with open(os.path.join(folder, "data.js"), "w") as f:
         f.write("const RESTIR_DATA = " + json.dumps(data) + ";\n")
@@ -227,21 +265,38 @@ def write_report(result, folder: str) -> str:
     e = html.escape
     scale = 720 / max(result.width, result.height)
     main_w, main_h = round(result.width * scale), round(result.height * scale)
-    crop = 220 / max(result.width, result.height)
-    buttons = "".join(f'<button class="method" data-index="{i}">{i}: {e(label)}</button>' for i, (label, _) in enumerate(images))
-    crops = "".join(f'<figure><canvas class="crop" data-index="{i}" width="{round(result.width * crop)}" '
-                    f'height="{round(result.height * crop)}"></canvas><figcaption>{i}: {e(label)}</figcaption></figure>'
-                    for i, (label, _) in enumerate(images))
-    rows = []
+    crop = 200 / max(result.width, result.height)
+    buttons = "".join(f'<button class="method" data-method="{i}">{i}: {e(m["label"])}</button>'
+                      for i, m in enumerate(methods))
+    kinds = "".join(f'<label><input type="radio" name="kind" value="{k}"{" disabled" if k == "denoised" and not denoised else ""}>'
+                    f' {text} ({k[0]})</label><br>'
+                    for k, text in (("accumulated", "accumulated"), ("frame", "last frame"),
+                                    ("denoised", "last frame denoised")))
+
+    def crop_fig(index, caption):
+        return (f'<figure><canvas class="crop" data-index="{index}" width="{round(result.width * crop)}" '
+                f'height="{round(result.height * crop)}"></canvas><figcaption>{e(caption)}</figcaption></figure>')
+
+    crops = [f'<div class="crow">{crop_fig(0, "0: reference")}</div>']
+    for i, m in enumerate(methods[1:], start=1):  # side by side: accumulated, the last frame raw and denoised
+        crops.append('<div class="crow">' + "".join(crop_fig(idx, f"{i}: {images[idx][0]}")
+                                                    for idx in m["views"].values()) + "</div>")
+    rows, shape_rows = [], []
     for m in result.methods:
         x = m.metrics
         z = f" (z {x['mean_z']:+.2f}, MDB {100 * x['mean_mdb']:.2f}%)" if x["mean_z"] is not None else ""
         mem = m.stats.get("bytes_per_pixel", {}).get("total")
-        den = x.get("relmse_denoised_frame")
         rows.append(f"<tr><td>{e(m.label)}</td><td>{m.frames}</td><td>{m.spp}</td><td>{x['ms_per_frame']:.1f}</td>"
                     f"<td>{x['relmse_frame']:.4g}</td><td>{x['relmse_accumulated']:.4g}</td><td>{x['mape']:.4g}</td>"
-                    f"<td>{_fmt(x['flip'], '{:.4f}')}</td><td>{x['mean_ratio']:.4f}{z}</td><td>{_fmt(den)}</td>"
+                    f"<td>{_fmt(x['flip'], '{:.4f}')}</td><td>{x['mean_ratio']:.4f}{z}</td>"
+                    f"<td>{_fmt(x.get('relmse_denoised_frame'))}</td><td>{_fmt(x.get('flip_denoised_frame'), '{:.4f}')}</td>"
                     f"<td>{_fmt(mem, '{:.0f}')}</td></tr>")
+        radial = dict(zip(m.radial["radii"], m.radial["values"])) if m.radial else {}
+        shape_rows.append(f"<tr><td>{e(m.label)}</td>"
+                          + "".join(f"<td>{_fmt(x['correlation_factor'][str(b)], '{:.2f}')}</td>" for b in BLOCK_SIZES)
+                          + "".join(f"<td>{_fmt(radial.get(r), '{:.3f}')}</td>" for r in TABLE_RADII)
+                          + f"<td>{_fmt(x['temporal_correlation'], '{:.3f}')}</td></tr>")
+    headline = "".join(f'<p class="headline">{e(h["text"])}</p>' for h in result.headline)
     notes = "".join(f'<p class="note">note: {e(n)}</p>' for n in result.notes)
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>restir compare: {e(result.scene)}</title>
@@ -260,17 +315,34 @@ restir's image-level bias test (batch means of consecutive frames) and its minim
 <p><b id="shown"></b> &middot; zoom <span id="zoom"></span></p>
 {buttons}
 <p>exposure <input id="exposure" type="range" min="-8" max="8" step="0.5" value="0"> <span id="ev">0.0</span> EV</p>
+<p>{kinds}</p>
 <p><label><input id="errview" type="checkbox"> relative error (key e)</label>,
 full scale <input id="errmax" type="number" min="0.01" step="0.05" value="0.5" style="width: 5em"></p>
-<p class="note">Keys 0-9 show an image (0: reference), hover or click a name; wheel or +/- zooms, drag pans,
-r resets. The crops below follow the view.</p>
+<p class="note">Keys 0-9 show a method (0: reference), hover or click a name; a, f, d: its accumulated image,
+last frame, last frame denoised (d toggles raw and denoised); wheel or +/- zooms, drag pans, r resets. The crops
+below follow the view and the error view.</p>
 </div></div>
-<div id="crops">{crops}</div>
+<div id="crops">{''.join(crops)}</div>
+<h2>Against the path tracer</h2>
+{headline or '<p class="note">no path tracer among the methods</p>'}
+<p class="note">Factor: the path tracer's relMSE over the method's (above 1: the method's error is lower). At
+equal time the path tracer is rendered at each method's frame time (its frame time fitted as a + b spp), so
+per frame both had the same time.</p>
 <h2>Metrics</h2>
 <table><tr><th>method</th><th>frames</th><th>spp/frame</th><th>ms/frame</th><th>relMSE per frame</th>
-<th>relMSE accumulated</th><th>MAPE</th><th>FLIP</th><th>mean ratio</th><th>relMSE of the denoised last frame</th>
-<th>bytes/pixel</th></tr>
+<th>relMSE accumulated</th><th>MAPE</th><th>FLIP</th><th>mean ratio</th><th>denoised relMSE per frame</th>
+<th>denoised FLIP per frame</th><th>bytes/pixel</th></tr>
 {''.join(rows)}</table>
+<h2>Error structure: what a denoiser sees</h2>
+<p class="note">Relative error e = (x - y) / sqrt(y^2 + 0.01) of single frames after the warm-up. Correlation
+factor at block size B: B^2 mean(block mean(e)^2) / mean(e^2) over aligned B x B blocks; 1 for independent
+pixel errors, B^2 for errors constant over each block (a B x B average leaves factor / B^2 of the error).
+Radial correlation: independent runs at one frame index, each pixel standardised over the runs, Pearson
+correlation with the pixel at offset (dy, dx), averaged over the square ring of radius r. Temporal: the
+correlation of consecutive frames' errors.</p>
+<table><tr><th>method</th>{''.join(f"<th>factor B={b}</th>" for b in BLOCK_SIZES)}
+{''.join(f"<th>radial r={r}</th>" for r in TABLE_RADII)}<th>temporal</th></tr>
+{''.join(shape_rows)}</table>
 <h2>Convergence</h2>
 {''.join(_plots(result))}
 </body></html>

@@ -8,8 +8,15 @@ pixel in total (N / spp frames). Otherwise every method renders `frames` frames.
 Both conventions of the field are reported. Per frame: the mean relMSE of single frames after
 `warmup` frames (what a real-time application shows). Accumulated: the average of every frame
 rendered within the budget (what an offline user gets). The bias check (image-mean ratio and its
-z, restir.validation's image-level test) uses batch means of consecutive frames (see
-`_Blocks`), since temporal reuse correlates consecutive frames.
+z, restir.validation's image-level test) uses batch means of consecutive frames (frames.py),
+since temporal reuse correlates consecutive frames.
+
+What a denoiser sees (structure.py, denoise.py): the error's correlation factor at block sizes 2
+to 16 and its temporal correlation, per frame after the warm-up; the radial correlation from
+independent runs at one frame index; and, with `denoise`, the per-frame error after Open Image
+Denoise. At equal time the path tracer is also rendered at each other method's frame time
+(equal_time.py), the fair per-frame baseline, and the headline (headline.py) gives each method's
+factor against it, raw and denoised.
 """
 import dataclasses
 import time
@@ -18,10 +25,9 @@ import numpy as np
 
 from ..config import ConfigError, RenderConfig, method_settings
 from . import metrics
+from . import structure
+from .frames import FrameStats
 from .reference import Reference, load_reference_file, path_traced_reference
-
-MAX_BLOCKS = 64  # batch means kept per method: between 32 and 64 equal blocks of frames
-
 
 @dataclasses.dataclass
 class MethodSpec:
@@ -78,6 +84,13 @@ class MethodResult:
     last_frame: np.ndarray | None = None
     denoised: np.ndarray | None = None  # the last frame through Open Image Denoise (compare(denoise=True))
     interrupted: bool = False           # Ctrl-C stopped it before its budget was spent
+    radial: dict | None = None          # radial correlation: radii, values, standard errors, runs, frame
+    frame_time_of: list = dataclasses.field(default_factory=list)  # the path tracer at these methods' frame time
+    denoise_subset: list | None = None  # the frames the denoised metrics are over (indices)
+    frame_subset: list | None = dataclasses.field(default=None, repr=False)  # those frames (not in the JSON)
+
+
+_IMAGES = ("image", "last_frame", "denoised", "frame_subset")
 
 
 @dataclasses.dataclass
@@ -91,67 +104,17 @@ class Comparison:
     methods: list
     notes: list = dataclasses.field(default_factory=list)
     interrupted: bool = False  # Ctrl-C: the methods up to the interrupted one, the rest not run
+    frame_time_fit: dict | None = None  # the path tracer's ms per frame as a + b spp (equal_time.py)
+    headline: list = dataclasses.field(default_factory=list)  # headline.py: factors against the path tracer
 
     def to_dict(self) -> dict:
         """Everything but the images, as plain JSON data."""
         return {"scene": self.scene, "width": self.width, "height": self.height, "budget": self.budget,
                 "warmup": self.warmup, "reference": self.reference.source, "notes": list(self.notes),
-                "interrupted": self.interrupted,
-                "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in ("image", "last_frame", "denoised")}
+                "interrupted": self.interrupted, "frame_time_fit": self.frame_time_fit,
+                "headline": [dict(h) for h in self.headline],
+                "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in _IMAGES}
                             for m in self.methods]}
-
-
-class _Blocks:
-    """Batch means of consecutive frames in at most MAX_BLOCKS equal blocks: when the blocks fill
-    up, neighbours merge and the block length doubles, so any number of frames is summarized in
-    bounded memory."""
-
-    def __init__(self):
-        self.sums, self.counts, self.length = [], [], 1
-
-    def add(self, frame):
-        if self.sums and self.counts[-1] < self.length:
-            self.sums[-1] += frame
-            self.counts[-1] += 1
-        else:
-            self.sums.append(frame.astype(np.float64))
-            self.counts.append(1)
-        if len(self.sums) > MAX_BLOCKS:
-            pairs = range(0, len(self.sums) - 1, 2)
-            merged = [(self.sums[i] + self.sums[i + 1], self.counts[i] + self.counts[i + 1]) for i in pairs]
-            if len(self.sums) % 2:
-                merged.append((self.sums[-1], self.counts[-1]))
-            self.sums, self.counts = [m[0] for m in merged], [m[1] for m in merged]
-            self.length *= 2
-
-    def full(self) -> np.ndarray:
-        """(B, H, W, 3) means of the complete blocks."""
-        keep = [s / c for s, c in zip(self.sums, self.counts) if c == self.length]
-        return np.stack(keep) if keep else np.zeros((0,))
-
-
-class FrameStats:
-    """A run's frames summarized as they arrive, in memory independent of their number: the running
-    sum, each frame's relMSE and the accumulated image's after it, the batch means (`_Blocks`),
-    the last frame."""
-
-    def __init__(self, reference: Reference):
-        self.ref = reference.image
-        self.total = np.zeros(self.ref.shape)
-        self.blocks = _Blocks()
-        self.frame_err, self.acc_err = [], []
-        self.count = 0
-        self.last = None
-
-    def add(self, frame):
-        x = np.asarray(frame, np.float64)
-        self.count += 1
-        self.total += x
-        self.blocks.add(x)
-        self.frame_err.append(metrics.relmse(x, self.ref))
-        self.acc_err.append(metrics.relmse(self.total / self.count, self.ref))
-        self.last = x
-        return self
 
 
 def measure(label, config: RenderConfig, frames: FrameStats, frame_seconds, reference: Reference, warmup: int,
@@ -165,9 +128,12 @@ def measure(label, config: RenderConfig, frames: FrameStats, frame_seconds, refe
     seconds = frame_seconds[-1]
     m = {"relmse_frame": float(np.mean(after)), "relmse_accumulated": frames.acc_err[-1],
          "mape": metrics.mape(image, ref), "flip": metrics.flip(image, ref), "mean_ratio": ratio, "mean_z": z,
-         "mean_mdb": mdb, "frames_after_warmup": len(after), "ms_per_frame": 1e3 * seconds / n}
+         "mean_mdb": mdb, "frames_after_warmup": len(after), "ms_per_frame": 1e3 * seconds / n,
+         **frames.structure()}
+    indices, subset = frames.denoise_frames()
     return MethodResult(label, config.method, dict(config.settings), config.spp, n, seconds, image.astype(np.float32),
-                        list(frame_seconds), frames.frame_err, frames.acc_err, m, stats, frames.last.astype(np.float32))
+                        list(frame_seconds), frames.frame_err, frames.acc_err, m, stats, frames.last.astype(np.float32),
+                        denoise_subset=indices, frame_subset=subset)
 
 
 def _compile_first(scene, config: RenderConfig):
@@ -178,15 +144,19 @@ def _compile_first(scene, config: RenderConfig):
     warm_kernels([(scene, config)])
 
 
+def _config(base: RenderConfig, spec: MethodSpec) -> RenderConfig:
+    return dataclasses.replace(base, method=spec.method, settings=dict(spec.settings), spp=spec.spp or 1)
+
+
 def _run_method(scene, spec: MethodSpec, base: RenderConfig, reference: Reference, budget, warmup, progress):
     from ..api import make_integrator, sized_scene
 
     kind, amount = budget
-    config = dataclasses.replace(base, method=spec.method, settings=dict(spec.settings), spp=spec.spp or 1)
+    config = _config(base, spec)
     frames_max = -(-amount // config.spp) if kind == "spp" else amount if kind == "frames" else base.frames
     _compile_first(scene, config)
     integ = make_integrator(sized_scene(scene, config), config)
-    frames, frame_seconds = FrameStats(reference), []
+    frames, frame_seconds = FrameStats(reference, warmup), []
     elapsed = 0.0
     interrupted = False
     try:
@@ -216,13 +186,12 @@ def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progre
     for spec in specs:
         spp = spec.spp or 1
         frames = -(-amount // spp) if kind == "spp" else amount
-        configs.append(dataclasses.replace(base, method=spec.method, settings=dict(spec.settings), spp=spp,
-                                           frames=frames, keep_frames=True))
+        configs.append(dataclasses.replace(_config(base, spec), frames=frames, keep_frames=True))
     renders = run_tasks([(scene, c) for c in configs], workers=workers, ray=ray,
                         progress=(lambda done, total: progress("methods", done / total)) if progress else None)
     out = []
     for spec, cfg, r in zip(specs, configs, renders):
-        fs = FrameStats(reference)
+        fs = FrameStats(reference, warmup)
         for x in r.frame_images:
             fs.add(x)
         ms = r.stats["ms_per_frame"]
@@ -231,11 +200,33 @@ def _fan_out(scene, specs, base, reference, budget, warmup, workers, ray, progre
     return out
 
 
+def _run_in_turn(scene, specs, base, reference, budget, warmup, progress, results, notes) -> bool:
+    """Render `specs` one after another into `results`; False when Ctrl-C stopped them (a note
+    says which finished, which was stopped and which never ran)."""
+    done = []
+    for s in specs:
+        try:
+            done.append(_run_method(scene, s, base, reference, budget, warmup, progress))
+        except KeyboardInterrupt:
+            done.append(None)
+        if done[-1] is None or done[-1].interrupted:
+            break
+    finished = [r for r in done if r is not None]
+    results.extend(finished)
+    if len(finished) < len(specs) or (finished and finished[-1].interrupted):
+        notes.append("interrupted (Ctrl-C): " + ", ".join(
+            f"{r.label} {'stopped after ' + str(r.frames) + ' frames' if r.interrupted else 'complete'}"
+            for r in finished) + "; not run: " + (", ".join(s.label for s in specs[len(finished):]) or "none"))
+        return False
+    return True
+
+
 def compare(scene, methods, *, reference: str | None = None, reference_spp: int = 1024,
             equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
             seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
             device: str = "cpu", progress=None, workers: int | None = None, ray: str | None = None,
-            denoise: bool = False, scene_file: str | None = None, defines: dict | None = None) -> Comparison:
+            denoise: bool = False, scene_file: str | None = None, defines: dict | None = None,
+            correlation_runs: int = 8, match_frame_time: bool = True) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
 
@@ -248,18 +239,33 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
 
     Each MethodResult.metrics holds relmse_frame (mean over frames after `warmup`),
     relmse_accumulated, mape, flip (None without flip-evaluator), mean_ratio with mean_z and
-    mean_mdb (the image-level bias test; None with fewer than 2 blocks), ms_per_frame.
+    mean_mdb (the image-level bias test; None with fewer than 2 blocks), ms_per_frame,
+    correlation_factor (per block size, mean over the frames after `warmup`) and
+    temporal_correlation (structure.py).
 
-    workers (default: one per core for equal samples or frames, 1 at equal time) > 1 or ray: the
-    methods render as independent tasks (restir/fanout.py), for equal samples or frames only: an
-    equal-time comparison needs each method alone on the machine. (Their ms per frame are then
-    measured under each other's load.)
+    match_frame_time (equal time only): the path tracer is also rendered, with the same budget, at
+    each other method's frame time (spp from a fit of its frame time, equal_time.py; methods whose
+    frame times give the same spp share one), the per-frame baseline of `Comparison.headline`.
+    Its settings are those of the first `pt` method given, if any.
 
-    denoise: each method's last frame is also denoised by Intel Open Image Denoise (the `pyoidn`
-    package, the `denoise` extra) with albedo and normal AOVs (restir/aov.py), the real-time use
-    of ReSTIR; MethodResult.denoised holds it and metrics["relmse_denoised_frame"] its error.
+    correlation_runs K >= 3 (0: none): every method (the matched path tracers too) is also rendered
+    K times with seeds seed + 1 .. seed + K for warmup + 1 frames; MethodResult.radial has the
+    radial correlation of those last frames (structure.radial_correlation).
+
+    workers (default: one per core, and at equal time 1 for the methods) > 1 or ray: independent
+    renders run as tasks (restir/fanout.py): the methods (equal samples or frames only: an
+    equal-time comparison needs each method alone on the machine; their ms per frame are then
+    measured under each other's load) and the correlation runs.
+
+    denoise: the frames after the warm-up (all, or an evenly spaced subset of 9 to 16: denoise.py)
+    and the last frame are denoised by Intel Open Image Denoise (the `pyoidn` package, the
+    `denoise` extra) with albedo and normal guides (restir/aov.py), the real-time use of ReSTIR;
+    metrics relmse_denoised_frame and flip_denoised_frame are means over those frames, with
+    relmse_frame_subset and flip_frame of the same frames raw; MethodResult.denoised is the
+    last frame denoised.
     """
     from ..api import check_device, sized_scene
+    from ..fanout import default_workers
 
     specs = [m if isinstance(m, MethodSpec) else MethodSpec.parse(m) for m in methods]
     if not specs:
@@ -272,20 +278,21 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         raise ConfigError("--equal-time must be > 0 seconds")
     if equal_spp is not None and equal_spp < 1:
         raise ConfigError("--equal-spp must be >= 1")
-    if workers is None:
-        from ..fanout import default_workers
-
-        workers = 1 if equal_time is not None else min(default_workers(), len(specs))
-    fan_out = ray is not None or workers > 1
-    if fan_out and equal_time is not None:
+    if correlation_runs != 0 and correlation_runs < 3:
+        raise ConfigError(f"--correlation-runs {correlation_runs}: the radial correlation needs at least 3 "
+                          "independent runs (0: none)")
+    if workers is not None and workers < 1:
+        raise ConfigError("--workers must be >= 1")
+    if equal_time is not None and (ray is not None or (workers or 1) > 1) and not correlation_runs:
         raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
-                          "its time would include the others' load); --workers and --ray apply to equal samples "
-                          "or frames")
+                          "its time would include the others' load); --workers and --ray apply to equal "
+                          "samples or frames, and to the correlation runs")
+    method_workers = workers or (1 if equal_time is not None else min(default_workers(), len(specs)))
+    fan_out = equal_time is None and (ray is not None or method_workers > 1)
     if denoise:
-        try:
-            import pyoidn  # noqa: F401
-        except ImportError:
-            raise ConfigError("--denoise needs Open Image Denoise: pip install 'restir[denoise]'") from None
+        from .denoise import require_oidn
+
+        require_oidn()
     if frames < 1 or warmup < 0 or reference_spp < 1:
         raise ConfigError("frames and reference spp must be >= 1, warmup >= 0")
     from ..integrators import METHODS
@@ -324,45 +331,103 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         budget, text = ("spp", equal_spp), f"equal samples: {equal_spp} spp per pixel per method"
     else:
         budget, text = ("frames", frames), f"{frames} frames per method"
-    interrupted_run = False
+    comparison = Comparison(scene.name, w, h, text, warmup, ref, [], notes)
     if fan_out:
-        results = _fan_out(scene, specs, base, ref, budget, warmup, workers, ray, progress)
+        comparison.methods = _fan_out(scene, specs, base, ref, budget, warmup, method_workers, ray, progress)
+        complete = True
     else:
-        results = []
-        for s in specs:
-            try:
-                results.append(_run_method(scene, s, base, ref, budget, warmup, progress))
-            except KeyboardInterrupt:
-                if not results:
-                    raise
-                results.append(None)
-            if results[-1] is None or results[-1].interrupted:
-                break
-        results = [r for r in results if r is not None]
-        if len(results) < len(specs) or results[-1].interrupted:
-            notes.append("interrupted (Ctrl-C): " + ", ".join(
-                f"{r.label} {'stopped after ' + str(r.frames) + ' frames' if r.interrupted else 'complete'}"
-                for r in results) + "; not run: " + (", ".join(s.label for s in specs[len(results):]) or "none"))
-            interrupted_run = True
-    if denoise:
-        _denoise(scene, base, results, ref)
-    return Comparison(scene.name, w, h, text, warmup, ref, results, notes,
-                      interrupted=interrupted_run)
+        complete = _run_in_turn(scene, specs, base, ref, budget, warmup, progress, comparison.methods, notes)
+    if complete and equal_time is not None and match_frame_time:
+        complete = _match_frame_time(scene, specs, base, ref, budget, warmup, progress, comparison)
+    if complete and correlation_runs:
+        complete = _radial(scene, comparison.methods, base, warmup, correlation_runs, workers, ray, progress, notes)
+    if complete and denoise:
+        complete = _denoise(scene, base, comparison.methods, ref, progress, notes)
+    comparison.interrupted = not complete
+    from .headline import headline
+
+    comparison.headline = headline(comparison)
+    return comparison
 
 
-def _denoise(scene, base: RenderConfig, results, reference: Reference):
-    """Each method's last frame through OIDN's RT filter (HDR, with noise-free albedo and normal
-    averaged over 64 camera samples)."""
-    import pyoidn
+def _match_frame_time(scene, specs, base, reference, budget, warmup, progress, comparison) -> bool:
+    """The path tracer at each non-pt method's frame time (same budget), appended to the
+    comparison's methods; a user's `pt` entry at the fitted spp is used as it is."""
+    from .equal_time import fit_frame_time
 
-    from ..aov import AOV_SAMPLES, compute_aovs
-    from ..api import make_integrator, sized_scene
+    others = [m for m in comparison.methods if m.method != "pt"]
+    if not others:
+        return True
+    given = [s for s in specs if s.method == "pt"]
+    settings = dict(given[0].settings) if given else {}
+    if progress:
+        progress("fitting the path tracer's frame time", 0.0)
+    fit = fit_frame_time(scene, base, max(m.metrics["ms_per_frame"] for m in others), settings)
+    comparison.frame_time_fit = fit.to_dict()
+    wanted = {}
+    for m in others:
+        wanted.setdefault(fit.spp_for(m.metrics["ms_per_frame"]), []).append(m.label)
+    new = []
+    for spp, labels in sorted(wanted.items()):
+        same = [r for r in comparison.methods if r.method == "pt" and r.spp == spp and r.settings == settings]
+        if same:
+            same[0].frame_time_of += labels
+            continue
+        label = "pt:" + ",".join([f"{k}={v}" for k, v in settings.items()] + [f"spp={spp}"])
+        new.append(MethodSpec(label, "pt", settings, spp))
+    before = len(comparison.methods)
+    complete = _run_in_turn(scene, new, base, reference, budget, warmup, progress, comparison.methods,
+                            comparison.notes)
+    for r in comparison.methods[before:]:
+        r.frame_time_of = wanted[r.spp]
+    comparison.notes.append(
+        "the path tracer at each method's frame time: ms per frame = {:.2f} + {:.3f} spp (probes {}); ".format(
+            fit.fixed_ms, fit.per_spp_ms, ", ".join(f"{s} spp {t:.1f} ms" for s, t in fit.probes))
+        + "; ".join(f"{', '.join(labels)}: {spp} spp" for spp, labels in sorted(wanted.items())))
+    return complete
 
-    cfg = dataclasses.replace(base, method="pt", spp=1, frames=1)
-    aux = compute_aovs(make_integrator(sized_scene(scene, cfg), cfg), ("albedo", "normal"), AOV_SAMPLES)
-    albedo = np.clip(aux["albedo"], 0.0, 1.0).astype(np.float32)
-    normal = aux["normal"].astype(np.float32)
+
+def _radial(scene, results, base, warmup, runs, workers, ray, progress, notes) -> bool:
+    """Each result's radial correlation from `runs` independent renders of warmup + 1 frames."""
+    from ..fanout import last_frame_task, run_tasks
+
+    tasks = []
     for m in results:
-        color = np.clip(np.nan_to_num(m.last_frame), 0.0, None).astype(np.float32)
-        m.denoised = np.asarray(pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True), np.float32)
-        m.metrics["relmse_denoised_frame"] = metrics.relmse(m.denoised, reference.image)
+        cfg = dataclasses.replace(base, method=m.method, settings=dict(m.settings), spp=m.spp, frames=warmup + 1)
+        tasks += [(scene, dataclasses.replace(cfg, seed=base.seed + 1 + k)) for k in range(runs)]
+    try:
+        frames = run_tasks(tasks, workers=workers, ray=ray, task=last_frame_task,
+                           progress=(lambda d, t: progress("correlation runs", d / t)) if progress else None)
+    except KeyboardInterrupt:
+        notes.append("interrupted (Ctrl-C) during the correlation runs: no radial correlation")
+        return False
+    for i, m in enumerate(results):
+        values, errors = structure.radial_correlation(np.stack(frames[i * runs:(i + 1) * runs]), structure.RADII)
+        m.radial = {"radii": list(structure.RADII), "values": values, "standard_errors": errors, "runs": runs,
+                    "frame": warmup}
+    return True
+
+
+def _denoise(scene, base: RenderConfig, results, reference: Reference, progress, notes) -> bool:
+    """The measured frames (denoise.py's subset) and the last frame through OIDN."""
+    from .denoise import Denoiser
+
+    try:
+        denoiser = Denoiser.for_scene(scene, base)
+        for i, m in enumerate(results):
+            den = [denoiser(x) for x in m.frame_subset]
+            m.denoised = denoiser(m.last_frame)
+            m.metrics["relmse_denoised_frame"] = float(np.mean([metrics.relmse(d, reference.image) for d in den]))
+            m.metrics["relmse_frame_subset"] = float(np.mean([metrics.relmse(x, reference.image)
+                                                              for x in m.frame_subset]))
+            flips = [metrics.flip(d, reference.image) for d in den]
+            raw_flips = [metrics.flip(x, reference.image) for x in m.frame_subset]
+            m.metrics["flip_denoised_frame"] = None if None in flips else float(np.mean(flips))
+            m.metrics["flip_frame"] = None if None in raw_flips else float(np.mean(raw_flips))
+            m.metrics["denoised_frames"] = len(den)
+            if progress:
+                progress("denoising", (i + 1) / len(results))
+    except KeyboardInterrupt:
+        notes.append("interrupted (Ctrl-C) while denoising: the denoised metrics are incomplete")
+        return False
+    return True

@@ -14,7 +14,8 @@ import os
 import numpy as np
 
 from ..config import ConfigError, RenderConfig, method_settings
-from .runner import Comparison, FrameStats, measure
+from .frames import FrameStats
+from .runner import Comparison, measure
 from .reference import load_reference_file, path_traced_reference
 
 
@@ -102,7 +103,7 @@ def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: in
     rows, firsts = [], []
     for (point, cfg), r in zip(configs, results):
         ms = r.stats["ms_per_frame"]
-        fs = FrameStats(ref)
+        fs = FrameStats(ref, warmup)
         for x in r.frame_images:
             fs.add(x)
         label = point_label(point)

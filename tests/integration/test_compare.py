@@ -12,7 +12,7 @@ import pytest
 
 import restir
 from restir.compare import MethodSpec, compare
-from restir.compare.runner import _Blocks
+from restir.compare.frames import _Blocks
 from restir.config import ConfigError
 from restir.image_io import read_exr
 
