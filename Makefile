@@ -11,11 +11,15 @@ $(STAMP): pyproject.toml
 	$(VENV)/bin/pip install -q -e ".[test]"
 	touch $(STAMP)
 
+# The demo: ReSTIR PT renders the indirect-lit room; then the path tracer, ReSTIR PT and Suffix ReSTIR
+# at equal time, raw and through Open Image Denoise, with the error's correlation (what a denoiser
+# sees) and the path tracer at each method's frame time: out/demo-compare/index.html
 demo: $(STAMP)
-	$(VENV)/bin/restir render builtin:cornell-box --width 512 --height 512 --spp 16 \
-		-o out/cornell-box.exr --png out/cornell-box.png --stats out/cornell-box.json
-	$(VENV)/bin/restir compare builtin:cornell-box --method pt --method restir-di --equal-time 4 \
-		--width 128 --height 128 --reference-spp 256 --report out/demo-compare
+	$(VENV)/bin/restir render builtin:indirect-room --method restir-pt --width 256 --height 256 --frames 16 \
+		-o out/indirect-room.exr --png out/indirect-room.png --stats out/indirect-room.json
+	$(VENV)/bin/restir compare builtin:indirect-room --method pt --method restir-pt --method suffix-restir \
+		--equal-time 2.5 --width 96 --height 96 --reference-spp 1024 --denoise \
+		--report out/demo-compare --json out/demo-compare.json
 
 # The report test drives Debian's chromium with chromedriver (Selenium); nothing downloads a browser.
 browser:

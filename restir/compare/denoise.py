@@ -35,7 +35,7 @@ class FrameSubset:
 
     def offer(self, index: int, frame) -> None:
         if self.offered % self.stride == 0:
-            self.frames.append(np.asarray(frame, np.float32))
+            self.frames.append(np.array(frame, np.float32))  # a copy: integrators reuse their output buffer
             self.indices.append(index)
             if len(self.frames) > 2 * self.target:
                 self.frames, self.indices = self.frames[::2], self.indices[::2]

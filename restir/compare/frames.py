@@ -63,7 +63,7 @@ class FrameStats:
         self._last_error = None
 
     def add(self, frame):
-        x = np.asarray(frame, np.float64)
+        x = np.array(frame, np.float64)  # a copy: integrators reuse their output buffer
         e = structure.relative_error(x, self.ref)
         if self.count >= self.warmup:
             for b in self.factors:

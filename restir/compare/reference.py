@@ -24,6 +24,15 @@ class Reference:
     source: str                       # "file PATH" or "pt N spp (cached KEY)"
     blocks: np.ndarray | None = None  # (B, H, W, 3) independent estimates (path tracer's frames), None: exact
 
+    def own_relmse(self) -> float | None:
+        """The relMSE the reference itself is expected to have (the variance of its mean from its
+        independent blocks, over ref^2 + 0.01), or None for an exact one. Every error measured
+        against it includes this much: E[(x - ref)^2] = E[(x - mu)^2] + E[(ref - mu)^2]."""
+        if self.blocks is None or len(self.blocks) < 2:
+            return None
+        var = np.asarray(self.blocks, np.float64).var(axis=0, ddof=1) / len(self.blocks)
+        return float(np.mean(var / (self.image ** 2 + 0.01)))
+
 
 def scene_digest(scene) -> str:
     """sha256 of everything the scene's image depends on."""

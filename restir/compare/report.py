@@ -259,6 +259,10 @@ def write_report(result, folder: str) -> str:
     os.makedirs(os.path.join(folder, "images"), exist_ok=True)
     for i, (label, img) in enumerate(images):
         write_exr(os.path.join(folder, "images", f"{i}.exr"), np.asarray(img, np.float32))
+    listing = [{"file": f"images/{index}.exr", "method": m["label"], "kind": kind, "label": images[index][0]}
+               for m in methods for kind, index in m["views"].items()]
+    with open(os.path.join(folder, "images.json"), "w") as f:  # which EXR is which
+        json.dump(listing, f, indent=2)
     with open(os.path.join(folder, "comparison.json"), "w") as f:
         json.dump(result.to_dict(), f, indent=2, default=str)
 

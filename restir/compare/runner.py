@@ -112,6 +112,7 @@ class Comparison:
         return {"scene": self.scene, "width": self.width, "height": self.height, "budget": self.budget,
                 "warmup": self.warmup, "reference": self.reference.source, "notes": list(self.notes),
                 "interrupted": self.interrupted, "frame_time_fit": self.frame_time_fit,
+                "reference_relmse": self.reference.own_relmse(),
                 "headline": [dict(h) for h in self.headline],
                 "methods": [{k: v for k, v in dataclasses.asdict(m).items() if k not in _IMAGES}
                             for m in self.methods]}
@@ -332,6 +333,11 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
     else:
         budget, text = ("frames", frames), f"{frames} frames per method"
     comparison = Comparison(scene.name, w, h, text, warmup, ref, [], notes)
+    own = ref.own_relmse()
+    if own is not None:
+        notes.append(f"the reference's own relMSE is about {own:.3g} (from its {len(ref.blocks)} independent "
+                     "blocks); every relMSE here includes it, so values near it (denoised frames, long "
+                     "accumulations) are not resolved: raise --reference-spp")
     if fan_out:
         comparison.methods = _fan_out(scene, specs, base, ref, budget, warmup, method_workers, ray, progress)
         complete = True

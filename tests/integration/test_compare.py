@@ -28,7 +28,7 @@ def comparison(tmp_path_factory):
     try:
         scene = restir.load_scene("builtin:cornell-box")
         result = compare(scene, ["pt:spp=2", "restir-di:spatial.neighbors=8"], reference_spp=64, equal_spp=16,
-                         warmup=2, width=32, height=32)
+                         warmup=2, width=32, height=32, correlation_runs=4, denoise=True)
     finally:
         del os.environ["RESTIR_CACHE"]
     return result, cache
@@ -57,8 +57,13 @@ def test_metrics_match_the_written_images(comparison, tmp_path):
     data = json.load(open(tmp_path / "comparison.json"))
     ref = read_exr(str(tmp_path / "images" / "0.exr")).astype(np.float64)
     assert np.allclose(ref, result.reference.image, rtol=1e-6, atol=1e-7)
-    for i, m in enumerate(data["methods"], start=1):
-        img = read_exr(str(tmp_path / "images" / f"{i}.exr")).astype(np.float64)
+    listing = json.load(open(tmp_path / "images.json"))
+    files = {(e["method"], e["kind"]): e["file"] for e in listing}
+    assert files[("reference", "accumulated")] == "images/0.exr"
+    for m, res in zip(data["methods"], result.methods):
+        img = read_exr(str(tmp_path / files[(m["label"], "accumulated")])).astype(np.float64)
+        last = read_exr(str(tmp_path / files[(m["label"], "frame")])).astype(np.float64)
+        assert np.mean((last - ref) ** 2 / (ref ** 2 + 0.01)) == pytest.approx(m["frame_relmse"][-1], rel=1e-4)
         rel = np.mean((img - ref) ** 2 / (ref ** 2 + 0.01))
         ape = np.mean(np.abs(img - ref) / (np.abs(ref) + 0.01))
         fl = flip_evaluator.evaluate(np.clip(ref, 0, None).astype(np.float32), np.clip(img, 0, None).astype(np.float32),
@@ -92,12 +97,51 @@ def test_reference_is_cached(comparison, monkeypatch):
 
 
 def test_equal_time_budget(tmp_path, monkeypatch):
+    """Every method's frames until the budget is spent; the path tracer also at restir-di's frame
+    time (its spp from the fit of the comparison's own probes), the baseline of the headline."""
     monkeypatch.setenv("RESTIR_CACHE", str(tmp_path))
     scene = restir.load_scene("builtin:cornell-box")
-    r = compare(scene, ["pt", "restir-di"], reference_spp=16, equal_time=0.5, width=16, height=16)
+    r = compare(scene, ["pt", "restir-di"], reference_spp=16, equal_time=0.5, width=16, height=16,
+                correlation_runs=0)
     for m in r.methods:  # frames until the budget is spent, the crossing frame kept
         assert m.seconds >= 0.5 and m.frame_seconds[-2] < 0.5 and m.frames >= 2
     assert r.methods[0].frames > r.methods[1].frames  # the path tracer's frames are cheaper
+    fit = r.frame_time_fit
+    assert fit and fit["per_spp_ms"] > 0 and fit["probes"][0]["spp"] == 1
+    di = r.methods[1]
+    spp = max(1, round((di.metrics["ms_per_frame"] - fit["fixed_ms"]) / fit["per_spp_ms"]))
+    matched = [m for m in r.methods if m.method == "pt" and "restir-di" in m.frame_time_of]
+    assert len(matched) == 1 and matched[0].spp == spp
+    assert (matched[0] is r.methods[0]) == (spp == 1) and len(r.methods) == (2 if spp == 1 else 3)
+    (h,) = r.headline
+    assert h["method"] == "restir-di" and h["baseline"] == matched[0].label and h["basis"] == "equal frame time"
+    assert h["raw_frame"] == pytest.approx(matched[0].metrics["relmse_frame"] / di.metrics["relmse_frame"])
+    assert h["denoised_frame"] is None and "per-frame relMSE raw" in h["text"]
+    assert any("each method's frame time" in n for n in r.notes)
+
+
+def test_structure_and_denoised_columns(comparison):
+    """The structure metrics and the denoised columns are in every method's metrics (their values
+    are tested against exact cases in tests/unit/test_error_structure.py), the denoised subset is
+    every frame after the warm-up here (at most 16), and the headline at equal samples is against
+    the path tracer given."""
+    result, _ = comparison
+    for m in result.methods:
+        x = m.metrics
+        assert set(x["correlation_factor"]) == {"2", "4", "8", "16"}
+        assert all(v is None or v > 0 for v in x["correlation_factor"].values())
+        assert -1 <= x["temporal_correlation"] <= 1
+        assert m.radial["runs"] == 4 and m.radial["frame"] == 2 and len(m.radial["values"]) == 16
+        assert all(np.isfinite(m.radial["values"][:8]))
+        assert m.denoise_subset == list(range(2, m.frames)) and x["denoised_frames"] == m.frames - 2
+        assert x["relmse_denoised_frame"] > 0 and x["flip_denoised_frame"] > 0 and x["flip_frame"] > 0
+        assert m.denoised.shape == (32, 32, 3)
+    pt, di = result.methods
+    # (at 32x32 the directly seen light's edge pixels dominate every correlation: values here are
+    # about +-0.2 from frame to frame, so only their range is checked)
+    (h,) = result.headline
+    assert (h["method"], h["baseline"], h["basis"]) == (di.label, pt.label, "equal samples")
+    assert h["denoised_frame"] == pytest.approx(pt.metrics["relmse_denoised_frame"] / di.metrics["relmse_denoised_frame"])
 
 
 def test_blocks_stay_equal_and_bounded():
@@ -128,6 +172,8 @@ def test_cli_refuses_bad_input_before_work(tmp_path):
         (["--method", "pt", "--json", str(tmp_path / "x.txt")], "--json"),
         (["--method", "pt", "--equal-time", "1", "--equal-spp", "4"], "not allowed with"),
         (["--method", "pt", "--reference", str(tmp_path / "missing.exr")], "no such file"),
+        (["--method", "pt", "--correlation-runs", "2"], "at least 3"),
+        (["--method", "pt", "--equal-time", "1", "--workers", "2", "--correlation-runs", "0"], "one after another"),
         ([], "at least one --method"),
     ]
     for extra, msg in cases:
@@ -150,11 +196,21 @@ def _chromium():
     return webdriver.Chrome(options=opts, service=Service(shutil.which("chromedriver") or "/usr/bin/chromedriver"))
 
 
-def operate_report(index, images, screenshot):
+def report_images(result):
+    """The report's images in its order: the reference, then per method its accumulated image,
+    its last frame and, when denoised, the last frame denoised."""
+    images = [result.reference.image]
+    for m in result.methods:
+        images += [m.image, m.last_frame] + ([m.denoised] if m.denoised is not None else [])
+    return images
+
+
+def operate_report(index, images, screenshot, denoised=False):
     """Open the report at `index` in chromium and operate it: every image decoded to `images` (the
-    reference first) and finite, every plot drawn, a number key switches the image shown (and the
-    canvas changes), the wheel zooms (the view and the canvas change), 'e' shows the error view,
-    no console errors; a screenshot is kept in out/artifacts/."""
+    reference first) and finite, every plot drawn (the radial correlation's too), a number key
+    switches the method shown (and the canvas changes), 'f' its last frame, 'd' the denoised last
+    frame and back (when `denoised`), the wheel zooms (the view and the canvas change), 'e' shows
+    the error view, no console errors; a screenshot is kept in out/artifacts/."""
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
     from selenium.webdriver.common.by import By
@@ -169,7 +225,8 @@ def operate_report(index, images, screenshot):
                                       "im.rgb.reduce((a, b) => a + b, 0) / im.rgb.length])")
         for (length, finite, mean), img in zip(stats, images):
             assert length == img.size and finite and mean == pytest.approx(float(np.mean(img)), rel=2e-3)
-        assert driver.execute_script("return document.querySelectorAll('.js-plotly-plot .main-svg').length") >= 5
+        assert driver.execute_script("return document.querySelectorAll('.js-plotly-plot .main-svg').length") >= 6
+        assert driver.execute_script("return document.getElementById('plot-radial') !== null")
         main = driver.find_element(By.ID, "main")
         pixels = lambda: driver.execute_script("return document.getElementById('main').toDataURL()")  # noqa: E731
         before = pixels()
@@ -178,7 +235,24 @@ def operate_report(index, images, screenshot):
         assert driver.find_element(By.ID, "shown").text == "reference"
         assert pixels() != before
         ActionChains(driver).send_keys("2").perform()
-        assert driver.execute_script("return restirView.index") == 2
+        assert driver.execute_script("return restirView.method") == 2
+        label = driver.execute_script("return D.methods[2].label")
+        assert driver.find_element(By.ID, "shown").text == label
+        accumulated = pixels()
+        ActionChains(driver).send_keys("f").perform()
+        assert driver.find_element(By.ID, "shown").text == label + ": last frame" and pixels() != accumulated
+        if denoised:
+            raw = pixels()
+            ActionChains(driver).send_keys("d").perform()
+            assert driver.execute_script("return restirView.kind") == "denoised"
+            assert driver.find_element(By.ID, "shown").text == label + ": last frame denoised"
+            assert pixels() != raw
+            ActionChains(driver).send_keys("d").perform()  # d toggles back to the raw frame
+            assert driver.execute_script("return restirView.kind") == "frame" and pixels() == raw
+            ActionChains(driver).send_keys("d").perform()
+        ActionChains(driver).send_keys("e").perform()  # the error view of the frame shown
+        assert pixels() != accumulated
+        ActionChains(driver).send_keys("e").perform()
         shown = pixels()
         ActionChains(driver).scroll_from_origin(ScrollOrigin.from_element(main), 0, -300).perform()
         WebDriverWait(driver, 5).until(lambda d: d.execute_script("return restirView.scale") > 1.0)
@@ -198,7 +272,7 @@ def test_report_in_a_browser(comparison, tmp_path):
 
     result, _ = comparison
     index = write_report(result, str(tmp_path / "report"))
-    operate_report(index, [result.reference.image] + [m.image for m in result.methods], "compare_report.png")
+    operate_report(index, report_images(result), "compare_report.png", denoised=True)
 
 
 @pytest.mark.slow
@@ -212,8 +286,11 @@ def test_the_documented_command_in_a_browser(tmp_path):
                        capture_output=True, text=True, env=env, timeout=1800)
     assert p.returncode == 0, p.stderr
     data = json.load(open(out / "comparison.json"))
-    images = [read_exr(str(out / "images" / f"{i}.exr")) for i in range(3)]
-    for m, img in zip(data["methods"], images[1:]):
+    listing = json.load(open(out / "images.json"))
+    images = [read_exr(str(out / e["file"])) for e in listing]
+    accumulated = {e["method"]: img for e, img in zip(listing, images) if e["kind"] == "accumulated"}
+    for m in data["methods"]:
+        img = accumulated[m["label"]]
         assert m["seconds"] >= 20 and m["frames"] >= 2
         ref = images[0].astype(np.float64)
         rel = np.mean((img - ref) ** 2 / (ref ** 2 + 0.01))

@@ -185,3 +185,15 @@ def test_frame_time_fit_accounts_for_the_fixed_cost(monkeypatch):
     assert (fit.fixed_ms, fit.per_spp_ms) == pytest.approx((12.0, 3.0))
     assert fit.spp_for(60.0) == 16 and fit.spp_for(15.0) == 1 and fit.spp_for(1.0) == 1
     assert fit.to_dict()["probes"] == [{"spp": 1, "ms": 15.0}, {"spp": 4, "ms": 24.0}]
+
+
+def test_reference_own_relmse():
+    """Blocks of known spread: 16 independent estimates with standard deviation 0.2 around 1 give
+    a mean whose variance is 0.04 / 16, so relMSE 0.0025 / 1.01 (the mean's own scatter, 5%,
+    shifts the denominator by under 1%); an exact reference has none."""
+    rng = np.random.default_rng(9)
+    blocks = 1.0 + 0.2 * rng.normal(size=(16, 64, 64, 3))
+    ref = Reference(blocks.mean(axis=0), "blocks", blocks)
+    # the variance estimate from 16 blocks has relative SE sqrt(2 / 15) per pixel, over 12288 values
+    assert ref.own_relmse() == pytest.approx(0.0025 / 1.01, rel=0.05)
+    assert Reference(np.ones((4, 4, 3)), "exact").own_relmse() is None
