@@ -343,6 +343,8 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
         complete = True
     else:
         complete = _run_in_turn(scene, specs, base, ref, budget, warmup, progress, comparison.methods, notes)
+        if not comparison.methods:  # Ctrl-C before the first method's first frame: nothing to keep
+            raise KeyboardInterrupt
     if complete and equal_time is not None and match_frame_time:
         complete = _match_frame_time(scene, specs, base, ref, budget, warmup, progress, comparison)
     if complete and correlation_runs:
@@ -368,7 +370,12 @@ def _match_frame_time(scene, specs, base, reference, budget, warmup, progress, c
     settings = dict(given[0].settings) if given else {}
     if progress:
         progress("fitting the path tracer's frame time", 0.0)
-    fit = fit_frame_time(scene, base, max(m.metrics["ms_per_frame"] for m in others), settings)
+    try:
+        fit = fit_frame_time(scene, base, max(m.metrics["ms_per_frame"] for m in others), settings)
+    except KeyboardInterrupt:
+        comparison.notes.append("interrupted (Ctrl-C) while fitting the path tracer's frame time: no path "
+                                "tracer at the methods' frame time")
+        return False
     comparison.frame_time_fit = fit.to_dict()
     wanted = {}
     for m in others:
@@ -424,8 +431,7 @@ def _denoise(scene, base: RenderConfig, results, reference: Reference, progress,
             den = [denoiser(x) for x in m.frame_subset]
             m.denoised = denoiser(m.last_frame)
             m.metrics["relmse_denoised_frame"] = float(np.mean([metrics.relmse(d, reference.image) for d in den]))
-            m.metrics["relmse_frame_subset"] = float(np.mean([metrics.relmse(x, reference.image)
-                                                              for x in m.frame_subset]))
+            m.metrics["relmse_frame_subset"] = float(np.mean([m.frame_relmse[k] for k in m.denoise_subset]))
             flips = [metrics.flip(d, reference.image) for d in den]
             raw_flips = [metrics.flip(x, reference.image) for x in m.frame_subset]
             m.metrics["flip_denoised_frame"] = None if None in flips else float(np.mean(flips))
