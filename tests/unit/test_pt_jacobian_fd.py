@@ -35,7 +35,8 @@ import warp as wp
 
 import restir
 from restir.api import make_integrator
-from restir.device.bsdf import Material, bsdf_sample, microfacet_of
+from restir.device.bsdf import Material, bsdf_sample
+from restir.device.bsdfs.material import microfacet_of
 from restir.device.intersect import T_MAX, surface_at, trace_closest
 from restir.device.microfacet import Microfacet, microfacet_sample, microfacet_sample_to_square
 from restir.device.path_steps import scatter
@@ -46,13 +47,14 @@ from restir.device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE
 from restir.device.types import LOBE_DIFFUSE_REFLECTION, MAT_PLASTIC, MAT_ROUGHPLASTIC, MICROFACET_BECKMANN, MICROFACET_GGX
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
-from restir.integrators.restir_pt.base_path import bounce_dim
-from restir.integrators.restir_pt.params import PTRParams
-from restir.integrators.restir_pt.path_sample import (NO_RC, RC_ENV, RC_SURFACE, PathReservoir, ends_with_nee,
+from restir.integrators.path_reuse.base_path import bounce_dim
+from restir.integrators.path_reuse.domain import domain_at
+from restir.integrators.path_reuse.params import PathReuseParams
+from restir.integrators.path_reuse.path_sample import (NO_RC, RC_ENV, RC_SURFACE, PathReservoir, ends_with_nee,
                                                       holds_path, lobe_at_rc, lobe_at_rc_prev, path_length, rc_kind,
                                                       rc_length)
-from restir.integrators.restir_pt.rc_criteria import segment
-from restir.integrators.restir_pt.shift import Replay, _replay_prefixes, make_shift, shift_path
+from restir.integrators.path_reuse.rc_criteria import segment
+from restir.integrators.path_reuse.shift import Replay, _replay_prefixes, make_shift, shift_path
 from restir.scene.builtin import cornell_box
 from tests.shared_scenes import scene_path
 
@@ -230,7 +232,7 @@ def grazing_cos(scene: SceneDevice, xr: Replay, yr: Replay, target: wp.vec3, kin
 
 def make_fd_kernel(shift, replay_prefix):
     @wp.kernel(module="unique")
-    def fd_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+    def fd_kernel(scene: SceneDevice, params: PathReuseParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
                   partner: wp.array(dtype=int), out: wp.array2d(dtype=float)):
         i = wp.tid()
         for col in range(N_OUT):
@@ -251,7 +253,7 @@ def make_fd_kernel(shift, replay_prefix):
         yr = replay_prefix(scene, params, y0, r.seed, rcl - 1)
         if xr.valid == 0 or yr.valid == 0:
             return
-        t = shift(scene, params, r, y0)
+        t = shift(scene, r, domain_at(y0, params))
         if t.valid == 0:
             return
         # ---- block at rcPrev: u -> z(u) -> u'

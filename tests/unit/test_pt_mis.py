@@ -23,11 +23,12 @@ from restir.device.color import luminance
 from restir.device.scene_device import SceneDevice
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading, similar_surfaces
-from restir.integrators.restir_pt.params import PTRParams
-from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path
-from restir.integrators.restir_pt.reuse_pair import make_reuse_pair
-from restir.integrators.restir_pt.reuse_pair import CURRENT, HISTORY
-from restir.integrators.restir_pt.shift import make_shift, shift_path
+from restir.integrators.path_reuse.domain import domain_at
+from restir.integrators.path_reuse.params import PathReuseParams
+from restir.integrators.path_reuse.path_sample import PathReservoir, holds_path
+from restir.integrators.path_reuse.reuse_pair import make_reuse_pair
+from restir.integrators.path_reuse.reuse_pair import CURRENT, HISTORY
+from restir.integrators.path_reuse.shift import make_shift, shift_path
 from restir.resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization, talbot_weight2
 from restir.resampling.ris import cap_history
 
@@ -58,7 +59,7 @@ def make_mis_kernel(shift):
     shift_in, shift_out, _, _ = make_reuse_pair(shift, None if shift is shift_path else "unique")
 
     @wp.kernel(module="unique")
-    def mis_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+    def mis_kernel(scene: SceneDevice, params: PathReuseParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
                    width: int, height: int, history_cap: float, out: wp.array2d(dtype=float)):
         pixel = wp.tid()
         for col in range(N_OUT):
@@ -84,11 +85,11 @@ def make_mis_kernel(shift):
             if sn.valid == 0 or not similar_surfaces(sc, sn):
                 continue
             M_j = 0.5 + float(j)
-            own = shift_out(scene, params, c, M_j, sn)  # y in technique j's domain: x_j
+            own = shift_out(scene, c, M_j, domain_at(sn, params))  # y in technique j's domain: x_j
             d_j_at_y = float(0.0)
             d_c_at_y = float(0.0)
             if own.t.valid != 0:
-                back = shift_in(scene, params, with_confidence(own.t.r, M_j), M_j, M_c, sc)  # as the pass shifts x_j here
+                back = shift_in(scene, with_confidence(own.t.r, M_j), M_j, M_c, domain_at(sc, params))  # as the pass shifts x_j here
                 d_j_at_y = back.d_i
                 d_c_at_y = back.d_c
                 producing += 1
@@ -104,10 +105,10 @@ def make_mis_kernel(shift):
             out[pixel, 3] = 1.0  # one technique: m_current = 1
             return
         M_q = cap_history(7.0, history_cap, M_c)
-        cur = shift_out(scene, params, c, M_q, sq)
+        cur = shift_out(scene, c, M_q, domain_at(sq, params))
         m_total = talbot_weight2(p_c * M_c, cur.d_i, CURRENT)
         if cur.t.valid != 0:
-            hist = shift_in(scene, params, with_confidence(cur.t.r, M_q), M_q, M_c, sc)
+            hist = shift_in(scene, with_confidence(cur.t.r, M_q), M_q, M_c, domain_at(sc, params))
             m_total += talbot_weight2(hist.d_c, hist.d_i, HISTORY)
             out[pixel, 4] = 1.0
         out[pixel, 3] = m_total

@@ -1,5 +1,5 @@
 """ReSTIR PT shifts preserve integrals (the property every reuse pass relies on), tested on the
-base paths of real scenes with the production shift (restir_pt/shift.py).
+base paths of real scenes with the production shift (path_reuse/shift.py).
 
 For pixels i and j = partner(i), with x_i the sample of i's initial reservoir (unbiased
 contribution weight W_i) and T the shift i -> j with Jacobian J:
@@ -27,10 +27,11 @@ from restir.device.scene_device import SceneDevice
 from restir.device.types import MAT_DIFFUSE
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
-from restir.integrators.restir_pt.params import PTRParams
-from restir.integrators.restir_pt.path_sample import (NO_RC, RC_SURFACE, PathReservoir, ends_with_nee, holds_path,
+from restir.integrators.path_reuse.domain import domain_at
+from restir.integrators.path_reuse.params import PathReuseParams
+from restir.integrators.path_reuse.path_sample import (NO_RC, RC_SURFACE, PathReservoir, ends_with_nee, holds_path,
                                                       path_length, rc_kind, rc_length)
-from restir.integrators.restir_pt.shift import make_shift, shift_path
+from restir.integrators.path_reuse.shift import make_shift, shift_path
 
 Z_CRIT = 4.4
 _kernels = {}
@@ -55,7 +56,7 @@ def integral_kernel(mutation: str):
         return wp.dot(c, wp.vec3(0.2126, 0.7152, 0.0722))
 
     @wp.kernel(module="unique")
-    def kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+    def kernel(scene: SceneDevice, params: PathReuseParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
                partner: wp.array(dtype=int), types: int, diffuse_primaries: int, out: wp.array(dtype=wp.vec2)):
         i = wp.tid()
         j = partner[i]
@@ -67,12 +68,12 @@ def integral_kernel(mutation: str):
         if si.valid != 0 and sj.valid != 0 and (diffuse_primaries == 0 or (
                 si.mat.kind == MAT_DIFFUSE and sj.mat.kind == MAT_DIFFUSE)):
             if holds_path(ri) and ri.W > 0.0 and counted(ri, types):
-                t = shift(scene, params, ri, sj)
+                t = shift(scene, ri, domain_at(sj, params))
                 if t.valid != 0:
                     a = lum(t.r.F) * t.J * ri.W
             rj = reservoirs[j]
             if holds_path(rj) and rj.W > 0.0 and counted(rj, types):
-                back = shift(scene, params, rj, si)
+                back = shift(scene, rj, domain_at(si, params))
                 if back.valid != 0:
                     b = lum(rj.F) * rj.W
         out[i] = wp.vec2(a, b)

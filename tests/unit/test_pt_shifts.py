@@ -1,5 +1,5 @@
 """ReSTIR PT shifts, deterministic properties (TESTING.md D2, D3; ALGORITHMS.md 3), on the base
-paths of real scenes, calling the production shift (restir_pt/shift.py) from a test kernel:
+paths of real scenes, calling the production shift (path_reuse/shift.py) from a test kernel:
 
 - identity (D2): a path shifted into its own domain is itself (F within 1e-3 relative) with J = 1;
 - round trip (D3): a path shifted to another pixel and back is the source path again (F within
@@ -16,9 +16,10 @@ import restir
 from restir.api import make_integrator
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
-from restir.integrators.restir_pt.params import PTRParams
-from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path, rc_length
-from restir.integrators.restir_pt.shift import make_shift, shift_path
+from restir.integrators.path_reuse.domain import domain_at
+from restir.integrators.path_reuse.params import PathReuseParams
+from restir.integrators.path_reuse.path_sample import PathReservoir, holds_path, rc_length
+from restir.integrators.path_reuse.shift import make_shift, shift_path
 from restir.device.scene_device import SceneDevice
 
 
@@ -34,7 +35,7 @@ def round_trip_kernel(mutation: str = "none"):
 
 def make_round_trip_kernel(shift_path):
     @wp.kernel(module="unique")
-    def round_trip_kernel(scene: SceneDevice, params: PTRParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
+    def round_trip_kernel(scene: SceneDevice, params: PathReuseParams, gb: GBuffer, reservoirs: wp.array(dtype=PathReservoir),
                             partner: wp.array(dtype=int), out: wp.array2d(dtype=float)):
         """Per pixel: [holds, rc length, F lum, identity valid, identity F lum, identity J, forward valid,
         back valid, back F lum, J product, forward J]."""
@@ -48,16 +49,16 @@ def make_round_trip_kernel(shift_path):
         out[pixel, 0] = 1.0
         out[pixel, 1] = float(rc_length(r.flags))
         out[pixel, 2] = wp.dot(r.F, wp.vec3(0.2126, 0.7152, 0.0722))
-        idn = shift_path(scene, params, r, sc)
+        idn = shift_path(scene, r, domain_at(sc, params))
         out[pixel, 3] = float(idn.valid)
         out[pixel, 4] = wp.dot(idn.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
         out[pixel, 5] = idn.J
         n = partner[pixel]
         sn = load_shading(scene, gb, n)
-        fwd = shift_path(scene, params, r, sn)
+        fwd = shift_path(scene, r, domain_at(sn, params))
         out[pixel, 6] = float(fwd.valid)
         if fwd.valid != 0:
-            back = shift_path(scene, params, fwd.r, sc)
+            back = shift_path(scene, fwd.r, domain_at(sc, params))
             out[pixel, 7] = float(back.valid)
             out[pixel, 8] = wp.dot(back.r.F, wp.vec3(0.2126, 0.7152, 0.0722))
             out[pixel, 9] = fwd.J * back.J

@@ -21,9 +21,9 @@ from restir.device.rng import hash_combine, rng_key
 from restir.device.scene_device import SceneDevice
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
-from restir.integrators.restir_pt.path_sample import PathReservoir, holds_path
-from restir.integrators.restir_pt.reuse_pair import make_reuse_pair
-from restir.integrators.restir_pt.shift import shift_path
+from restir.integrators.path_reuse.path_sample import PathReservoir, holds_path
+from restir.integrators.path_reuse.reuse_pair import make_reuse_pair
+from restir.integrators.path_reuse.shift import shift_path
 from restir.integrators.suffix_restir.domains import Domain, load_domain, suffix_params
 from restir.integrators.suffix_restir.params import SRParams
 from restir.integrators.suffix_restir.prefix import PrefixReservoir, prefix_end_shading, trace_prefix
@@ -77,7 +77,7 @@ def make_kernel(gather):
             if not holds_path(suffixes[n]) or suffixes[n].W <= 0.0:
                 empty += 1
             dk = load_domain(scene, params, prefixes, prefix_gb, n)
-            xk = shift_out(scene, dk.params, y, 1.0, dk.sh)  # y as technique k would have sampled it
+            xk = shift_out(scene, y, 1.0, dk)  # y as technique k would have sampled it
             if xk.t.valid == 0:
                 continue
             t = gather.neighbor_term(scene, params, dst, slots, k, as_sample(xk.t.r), prefixes, prefix_gb, suffixes)

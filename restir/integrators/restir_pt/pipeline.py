@@ -6,15 +6,15 @@ render_frame is the table of contents; each stage is one kernel in its own file.
 import numpy as np
 
 from ..common.primary_hits import primary_hits_kernel
-from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC
-from .params import PTRParams
-from .path_reuse import PT_MAX_DEPTH, PathReuseIntegrator  # noqa: F401  (PT_MAX_DEPTH: the public limit)
+from ..path_reuse.direct_light import DI_SETTINGS, DI_SETTINGS_DOC
+from ..path_reuse.integrator import PathReuseIntegrator
+from ..path_reuse.params import PathReuseParams
+from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
+from ..path_reuse.shift import make_shift
 from .s1_initial import initial_kernel, make_initial_kernel
 from .s2_temporal import make_temporal_kernel, temporal_kernel
 from .s3_spatial import make_spatial_kernel, spatial_kernel
 from .s4_shade import shade_kernel
-from .shift import MUTATIONS as SHIFT_MUTATIONS
-from .shift import make_shift
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of the stage kernels
 # (or, for the race, of the pipeline) that the harness refuses unless asked; the shipped
@@ -85,7 +85,7 @@ class ReSTIRPT(PathReuseIntegrator):
         self.allocate_path_reuse()
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
 
-    def params(self, frame: int, sample: int) -> PTRParams:
+    def params(self, frame: int, sample: int) -> PathReuseParams:
         s = self.settings
         return self.pt_params(frame, sample, s["rc.near_distance"], s["temporal.cap"])
 

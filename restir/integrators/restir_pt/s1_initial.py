@@ -13,11 +13,10 @@ from ...resampling.ris import ris_finalize, ris_init
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import load_shading
-from .base_path import BasePath, trace_base_path
-from .params import KERNEL_MODULE, PTRParams
-from .path_sample import MAX_PATH_LENGTH, PathReservoir, empty_path, store
-
-EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
+from ..path_reuse.base_path import EVENTS_PER_PATH, BasePath, trace_base_path
+from ..path_reuse.params import PathReuseParams
+from ..path_reuse.path_sample import PathReservoir, empty_path, store
+from .kernel_module import KERNEL_MODULE
 
 
 def make_initial_kernel(m_per_event: bool = False):
@@ -25,7 +24,7 @@ def make_initial_kernel(m_per_event: bool = False):
     divides W by it), the defect TESTING.md 5.11 lists; the shipped kernel is built without it."""
 
     @wp.kernel(module="unique" if m_per_event else KERNEL_MODULE)
-    def initial_kernel(offset: int, scene: SceneDevice, params: PTRParams, gb: GBuffer,
+    def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
                        reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset
         acc = BasePath()

@@ -21,10 +21,12 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
-from .params import KERNEL_MODULE, PTRParams
-from .path_sample import PathReservoir, store
-from .reuse_pair import make_reuse_pair
-from .shift import shift_path
+from ..path_reuse.domain import domain_at
+from ..path_reuse.params import PathReuseParams
+from ..path_reuse.path_sample import PathReservoir, store
+from ..path_reuse.reuse_pair import make_reuse_pair
+from ..path_reuse.shift import shift_path
+from .kernel_module import KERNEL_MODULE
 
 
 def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
@@ -33,7 +35,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
-    def temporal_kernel(offset: int, scene: SceneDevice, params: PTRParams, prev_camera: Camera, gb: GBuffer,
+    def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                         shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
@@ -49,17 +51,17 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
         if nq.pixel == NO_PIXEL:
             return
         q = nq.pixel
-        sq = nq.sh
+        dc = domain_at(sc, params)
+        dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
         r = prev_reservoirs[q]
         Mq = cap_history(r.M, params.temporal_cap, c.M)
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
         if wp.static(drop_failed):
-            if shift_in(scene, params, r, Mq, c.M, sc).t.valid == 0:
+            if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
                 return
         # ---- the history's sample shifted here, and the current sample there (its density there)
-        st = temporal_pair(scene, c, params, sc, r, Mq, params, sq, rng_uniform(key, base),
-                           rng_uniform(key, base + wp.uint32(1)))
+        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
         shifts[pixel] = st.tl.counts
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
         events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)

@@ -19,10 +19,12 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_technique
 from ..common.shading import load_shading
-from .params import KERNEL_MODULE, PTRParams
-from .path_sample import PathReservoir, store
-from .reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
-from .shift import shift_path
+from ..path_reuse.domain import domain_at
+from ..path_reuse.params import PathReuseParams
+from ..path_reuse.path_sample import PathReservoir, store
+from ..path_reuse.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
+from ..path_reuse.shift import shift_path
+from .kernel_module import KERNEL_MODULE
 
 
 def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None):
@@ -31,7 +33,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
     shift_in, _, _, spatial_neighbor = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
-    def spatial_kernel(offset: int, scene: SceneDevice, params: PTRParams, width: int, height: int, gb: GBuffer,
+    def spatial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                        shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset
@@ -44,6 +46,7 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
             return
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_SPATIAL + params.spatial_round), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE)
+        dc = domain_at(sc, params)  # ReSTIR PT's pixels share the frame's parameters
         st = spatial_start(c, params.spatial_k)
         for j in range(params.spatial_k):
             dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
@@ -53,10 +56,10 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
                 continue
             r = reservoirs_in[nb.pixel]
             if wp.static(drop_failed):
-                if shift_in(scene, params, r, r.M, c.M, sc).t.valid == 0:
+                if shift_in(scene, r, r.M, c.M, dc).t.valid == 0:
                     continue
             # ---- the neighbour's sample here, and this pixel's sample there
-            st = spatial_neighbor(st, scene, c, params, sc, r, params, nb.sh, j,
+            st = spatial_neighbor(st, scene, c, dc, r, domain_at(nb.sh, params), j,
                                   rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
         st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))

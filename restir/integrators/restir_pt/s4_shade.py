@@ -10,8 +10,8 @@ sample came from the pixel's own base path, temporal or spatial reuse; for the s
 import warp as wp
 
 from ..common.events import output_events
-from .params import KERNEL_MODULE
-from .path_sample import PathReservoir, holds_path, origin
+from ..path_reuse.path_sample import PathReservoir, holds_path, origin
+from .kernel_module import KERNEL_MODULE
 
 
 @wp.kernel(module=KERNEL_MODULE)

@@ -1,24 +1,20 @@
 """Suffix domains: a pixel's resampled prefix end x_P with the direction back toward x_{P-1}
 (the prefix G-buffer: triangle, barycentrics, segment length, segment direction) and its prefix
-length P, which sets how long a suffix there may be (ReSTIR PT's max_depth - P)."""
+length P, which sets how long a suffix there may be (max_depth - P): a path-reuse `Domain` whose
+start vertex is x_P."""
 import warp as wp
 
 from ..common.gbuffer import GBuffer
-from ..common.shading import Shading, load_shading
-from ..restir_pt.params import PTRParams
+from ..common.shading import load_shading
+from ..path_reuse.domain import Domain
+from ..path_reuse.params import PathReuseParams
 from .params import SRParams
 from .prefix import PrefixReservoir, has_prefix, prefix_length
 from ...device.scene_device import SceneDevice
 
 
-@wp.struct
-class Domain:
-    sh: Shading        # x_P as the suffixes' start vertex (sh.valid = 0: the pixel has no prefix end)
-    params: PTRParams  # ReSTIR PT's parameters for suffixes there: max_depth - P, every event owned
-
-
 @wp.func
-def suffix_params(params: SRParams, P: int) -> PTRParams:
+def suffix_params(params: SRParams, P: int) -> PathReuseParams:
     p = params.pt
     p.max_depth = params.pt.max_depth - P
     p.first_event = 0

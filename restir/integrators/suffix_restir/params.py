@@ -1,7 +1,7 @@
 """Per-frame values of the Suffix ReSTIR stages (runtime, not compile-time)."""
 import warp as wp
 
-from ..restir_pt.params import PTRParams
+from ..path_reuse.params import PathReuseParams
 
 GATHER_TALBOT = wp.constant(0)    # generalized balance over the neighbours and the canonical technique
 GATHER_PAIRWISE = wp.constant(1)  # pairwise between each neighbour and the canonical technique
@@ -18,7 +18,7 @@ class SRParams:
     # scene), candidates, max_depth (the whole path's: a suffix domain's budget is max_depth - P),
     # first_event (the first event a prefix leaves to the suffixes' side: 0 or 1, as ReSTIR PT's),
     # the suffix temporal cap and the suffix spatial neighbours/radius/round
-    pt: PTRParams
+    pt: PathReuseParams
     min_prefix: int           # the prefix end's smallest vertex index P (prefix.min_length)
     adaptive: int             # prefix ends one vertex after the first rough bounce (0: exactly at min_prefix)
     avoid_specular_end: int   # adaptive: reject specular-only prefix ends

@@ -13,8 +13,8 @@ from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
-from ..restir_di.component import DI_SETTINGS, DI_SETTINGS_DOC
-from ..restir_pt.path_reuse import PathReuseIntegrator
+from ..path_reuse.direct_light import DI_SETTINGS, DI_SETTINGS_DOC
+from ..path_reuse.integrator import PathReuseIntegrator
 from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
 from .s1_prefix import prefix_kernel

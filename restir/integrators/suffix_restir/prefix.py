@@ -23,9 +23,9 @@ from ...device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
-from ..restir_pt.base_path import bounce_dim, found_along
-from ..restir_pt.path_sample import lobe_code, lobe_from_code
-from ..restir_pt.rc_criteria import eval_lobe, lobe_weight, segment
+from ..path_reuse.base_path import bounce_dim, found_along
+from ..path_reuse.path_sample import lobe_code, lobe_from_code
+from ..path_reuse.rc_criteria import eval_lobe, lobe_weight, segment
 from .params import SRParams
 
 

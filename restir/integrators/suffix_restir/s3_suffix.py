@@ -28,11 +28,10 @@ from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
-from ..restir_pt.base_path import BasePath, trace_base_path
-from ..restir_pt.path_sample import NO_RC, PathReservoir, empty_path, holds_path, rc_length, store
-from ..restir_pt.reuse_pair import make_reuse_pair
-from ..restir_pt.s1_initial import EVENTS_PER_PATH
-from ..restir_pt.shift import shift_path
+from ..path_reuse.base_path import EVENTS_PER_PATH, BasePath, trace_base_path
+from ..path_reuse.path_sample import NO_RC, PathReservoir, empty_path, holds_path, rc_length, store
+from ..path_reuse.reuse_pair import make_reuse_pair
+from ..path_reuse.shift import shift_path
 from .domains import Domain, load_domain
 from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, prefix_length
@@ -117,8 +116,7 @@ def make_suffix_kernel(mutation: str = "none"):
         Mq = cap_history(r.M, params.suffix_cap, 1.0)
         key = rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_SUFFIX_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.pt.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        st = temporal_pair(scene, c, dc.params, dc.sh, r, Mq, dq.params, dq.sh, rng_uniform(key, base),
-                           rng_uniform(key, base + wp.uint32(1)))
+        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
         shifts[pixel] = st.tl.counts
         reservoirs[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
         ev = stage_events(st.s, st.tl.failed, st.tl.rays)

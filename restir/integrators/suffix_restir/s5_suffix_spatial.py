@@ -17,9 +17,9 @@ from ...resampling.ris import ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
-from ..restir_pt.path_sample import PathReservoir, store
-from ..restir_pt.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
-from ..restir_pt.shift import shift_path
+from ..path_reuse.path_sample import PathReservoir, store
+from ..path_reuse.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
+from ..path_reuse.shift import shift_path
 from .domains import load_domain
 from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir
@@ -54,7 +54,7 @@ def make_suffix_spatial_kernel(shift=shift_path, module=None):
             dn = load_domain(scene, params, prefixes, prefix_gb, n)
             if dn.sh.valid == 0:
                 continue
-            st = spatial_step(st, scene, c, dc.params, dc.sh, reservoirs_in[n], dn.params, dn.sh, j,
+            st = spatial_step(st, scene, c, dc, reservoirs_in[n], dn, j,
                               rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
         st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))

@@ -31,10 +31,10 @@ from ..common.events import output_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import spatial_neighbor
 from ..common.shading import load_shading
-from ..restir_pt.base_path import BasePath, trace_base_path
-from ..restir_pt.path_sample import PathReservoir, empty_path, holds_path, store
-from ..restir_pt.reuse_pair import ShiftedIn, ShiftTally, make_reuse_pair, tally
-from ..restir_pt.shift import shift_path
+from ..path_reuse.base_path import BasePath, trace_base_path
+from ..path_reuse.path_sample import PathReservoir, empty_path, holds_path, store
+from ..path_reuse.reuse_pair import ShiftedIn, ShiftTally, make_reuse_pair, tally
+from ..path_reuse.shift import shift_path
 from .domains import Domain, load_domain, suffix_params
 from .params import GATHER_TALBOT, KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, has_prefix, prefix_end_shading, trace_prefix
@@ -111,7 +111,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
         p_hat_k(T x) J M_k, M_k capped at gather_cap; 0 where the shift fails."""
         n = slots.pixel[k]
         dk = load_domain(scene, params, prefixes, prefix_gb, n)
-        return shift_out(scene, dk.params, x, cap_history(suffixes[n].M, params.gather_cap, 1.0), dk.sh).d_i
+        return shift_out(scene, x, cap_history(suffixes[n].M, params.gather_cap, 1.0), dk).d_i
 
     @wp.func(module=module)
     def neighbor_term(scene: SceneDevice, params: SRParams, dst: Domain, slots: Slots, j: int, r: PathReservoir,
@@ -122,7 +122,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
         t = NeighborTerm()
         n = slots.pixel[j]
         M_j = cap_history(suffixes[n].M, params.gather_cap, 1.0)
-        t.y = shift_in(scene, dst.params, r, M_j, 1.0, dst.sh)
+        t.y = shift_in(scene, r, M_j, 1.0, dst)
         if t.y.t.valid == 0:
             return t
         if params.gather_mis == GATHER_TALBOT:

@@ -11,7 +11,7 @@ ReSTIR PT"), 8 candidates and 1 round leave ReSTIR PT's error unchanged (within 
 frame 17-33% cheaper: the direct light's share of the error is small beside the indirect paths'
 and the one camera sample's.
 """
-from .pipeline import ReSTIRDI
+from ..restir_di.pipeline import ReSTIRDI
 
 DI_DEFAULTS_IN_PATH_METHODS = {"candidates": 8, "spatial.rounds": 1}
 DI_SETTINGS = {f"di.{k}": DI_DEFAULTS_IN_PATH_METHODS.get(k, v) for k, v in ReSTIRDI.SETTINGS.items()

@@ -26,8 +26,7 @@ from ...device.color import luminance
 from ...device.scene_device import SceneDevice
 from ...resampling.mis import PairwiseMIS, pairwise_add_neighbor, pairwise_init, talbot_weight2
 from ...resampling.ris import RisState, ris_init, ris_merge
-from ..common.shading import Shading
-from .params import PTRParams
+from .domain import Domain
 from .path_sample import ORIGIN_SPATIAL, ORIGIN_TEMPORAL, PathReservoir, holds_path, with_origin
 from .shift import ShiftResult, shift_counts, shift_path
 
@@ -103,12 +102,11 @@ def make_reuse_pair(shift=shift_path, module=None):
         return _pairs[shift]
 
     @wp.func(module=module)
-    def shift_in(scene: SceneDevice, params: PTRParams, r: PathReservoir, M_i: float, M_c: float,
-                 sc: Shading) -> ShiftedIn:
+    def shift_in(scene: SceneDevice, r: PathReservoir, M_i: float, M_c: float, dc: Domain) -> ShiftedIn:
         out = ShiftedIn()
         if holds_path(r) and r.W > 0.0:
             out.tried = 1
-            out.t = shift(scene, params, r, sc)
+            out.t = shift(scene, r, dc)
             if out.t.valid != 0:
                 out.p_c = luminance(out.t.r.F)
                 out.d_i = luminance(r.F) * M_i
@@ -116,23 +114,23 @@ def make_reuse_pair(shift=shift_path, module=None):
         return out
 
     @wp.func(module=module)
-    def shift_out(scene: SceneDevice, params: PTRParams, c: PathReservoir, M_i: float, si: Shading) -> ShiftedOut:
+    def shift_out(scene: SceneDevice, c: PathReservoir, M_i: float, di: Domain) -> ShiftedOut:
         out = ShiftedOut()
         if holds_path(c) and c.W > 0.0:
             out.tried = 1
-            out.t = shift(scene, params, c, si)
+            out.t = shift(scene, c, di)
             if out.t.valid != 0:
                 out.d_i = luminance(out.t.r.F) * out.t.J * M_i
         return out
 
     @wp.func(module=module)
-    def temporal_pair(scene: SceneDevice, c: PathReservoir, c_params: PTRParams, sc: Shading, r: PathReservoir,
-                      Mq: float, q_params: PTRParams, sq: Shading, u_current: float, u_history: float) -> Reuse:
-        """The canonical input c (domain sc) with the history r (domain sq, confidence Mq, already
+    def temporal_pair(scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, Mq: float, dq: Domain,
+                      u_current: float, u_history: float) -> Reuse:
+        """The canonical input c (domain dc) with the history r (domain dq, confidence Mq, already
         capped): each shifted into the other's domain, generalized balance MIS over the two."""
         st = Reuse()
-        hist = shift_in(scene, c_params, r, Mq, c.M, sc)
-        cur = shift_out(scene, q_params, c, Mq, sq)
+        hist = shift_in(scene, r, Mq, c.M, dc)
+        cur = shift_out(scene, c, Mq, dq)
         st.tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
         st.s = ris_init()
         p_c = luminance(c.F)
@@ -145,12 +143,13 @@ def make_reuse_pair(shift=shift_path, module=None):
         return st
 
     @wp.func(module=module)
-    def spatial_neighbor(st: Reuse, scene: SceneDevice, c: PathReservoir, c_params: PTRParams, sc: Shading,
-                         r: PathReservoir, n_params: PTRParams, sn: Shading, j: int, u: float) -> Reuse:
-        """Neighbour j (sample r, domain sn, valid by geometry) into the pairwise resampling of c."""
+    def spatial_neighbor(st: Reuse, scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, dn: Domain,
+                         j: int, u: float) -> Reuse:
+        """Neighbour j (sample r, domain dn, valid by geometry) into the pairwise resampling of c
+        (domain dc)."""
         out = st
-        nbr = shift_in(scene, c_params, r, r.M, c.M, sc)
-        own = shift_out(scene, n_params, c, r.M, sn)
+        nbr = shift_in(scene, r, r.M, c.M, dc)
+        own = shift_out(scene, c, r.M, dn)
         out.tl = tally(tally(st.tl, r, nbr.t, nbr.tried, 1), c, own.t, own.tried, 0)
         out.mis = pairwise_add_neighbor(st.mis, nbr.d_i, nbr.d_c, luminance(c.F) * c.M, own.d_i)
         out.s = ris_merge(st.s, out.mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j, u)

@@ -20,7 +20,7 @@ import warp as wp
 from ...device.bsdf import BSDFSample, Material, bsdf_eval_lobes, bsdf_has_rough_component, bsdf_pdf_lobes, lobe_is_rough
 from ...device.intersect import offset_origin
 from ...device.types import MAT_ROUGHPLASTIC
-from .params import SHIFT_HYBRID, SHIFT_RECONNECTION, PTRParams
+from .params import SHIFT_HYBRID, SHIFT_RECONNECTION, PathReuseParams
 
 
 @wp.func
@@ -38,7 +38,7 @@ def segment(p: wp.vec3, ng: wp.vec3, q: wp.vec3) -> wp.vec4:
 
 
 @wp.func
-def qualifies_scatter_vertex(params: PTRParams, k: int, dist: float, prev_rough: bool, mat: Material,
+def qualifies_scatter_vertex(params: PathReuseParams, k: int, dist: float, prev_rough: bool, mat: Material,
                              lobe: int) -> bool:
     """x_k, reached over a segment of length dist from x_{k-1} (whose lobe was prev_rough),
     qualifies as the rc vertex of a path that scatters on from it with `lobe`."""
@@ -50,7 +50,7 @@ def qualifies_scatter_vertex(params: PTRParams, k: int, dist: float, prev_rough:
 
 
 @wp.func
-def qualifies_nee_vertex(params: PTRParams, k: int, dist: float, prev_rough: bool, mat: Material) -> bool:
+def qualifies_nee_vertex(params: PathReuseParams, k: int, dist: float, prev_rough: bool, mat: Material) -> bool:
     """x_k qualifies as the rc vertex of a path that ends with NEE at x_k."""
     if params.shift == SHIFT_RECONNECTION:
         return k == 1
@@ -60,7 +60,7 @@ def qualifies_nee_vertex(params: PTRParams, k: int, dist: float, prev_rough: boo
 
 
 @wp.func
-def qualifies_escape_vertex(params: PTRParams, k: int, dist: float, lobe_rough: bool, is_env: bool) -> bool:
+def qualifies_escape_vertex(params: PathReuseParams, k: int, dist: float, lobe_rough: bool, is_env: bool) -> bool:
     """The emitter (or environment) x_k found by BSDF sampling at x_{k-1} with a lobe that was
     lobe_rough qualifies as the rc vertex of the path that ends on it."""
     if params.shift == SHIFT_RECONNECTION:

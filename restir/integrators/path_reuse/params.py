@@ -1,4 +1,5 @@
-"""Per-frame values of the ReSTIR PT stages (runtime, not compile-time), and the shift kinds."""
+"""Per-frame values of the path-reuse stages (runtime, not compile-time): ReSTIR PT's, and each
+suffix domain's in Suffix ReSTIR; and the shift kinds."""
 import warp as wp
 
 SHIFT_HYBRID = wp.constant(0)        # replay up to the first vertex that qualifies, then reconnect
@@ -6,14 +7,10 @@ SHIFT_RECONNECTION = wp.constant(1)  # always reconnect at x2 (length 1), no con
 SHIFT_REPLAY = wp.constant(2)        # replay the whole path with the source's random numbers
 SHIFTS = {"hybrid": SHIFT_HYBRID, "reconnection": SHIFT_RECONNECTION, "replay": SHIFT_REPLAY}
 
-# The Warp module of the shipped stage kernels: one module, so that the code they share (the base
-# path, the shift) is compiled once, not once per stage file (the CUDA compile check takes minutes
-# per module). Fault-injected builds go to modules of their own.
-KERNEL_MODULE = "restir_pt"
 
 
 @wp.struct
-class PTRParams:
+class PathReuseParams:
     seed: wp.uint32
     frame: wp.uint32
     sample: int            # sample index within the frame (spp > 1 repeats the pipeline)

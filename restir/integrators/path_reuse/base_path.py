@@ -29,10 +29,12 @@ from ...device.streams import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM
 from ...device.types import ENV_NONE, STRATEGY_MIS
 from ...resampling.ris import RisState, ris_stream
 from ..common.shading import Shading
-from .params import PTRParams
-from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags)
+from .params import PathReuseParams
+from .path_sample import (MAX_PATH_LENGTH, NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags)
 from .rc_criteria import (lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex,
                           segment)
+
+EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
 
 
 @wp.struct
@@ -98,7 +100,7 @@ def event_record(F: wp.vec3, flags: int, seed: wp.uint32, rc_tri: int, rc_bary: 
 
 
 @wp.func(inline=False)  # out of line: one copy per module however many stages trace base paths
-def trace_base_path(scene: SceneDevice, params: PTRParams, x0: Shading, seed: wp.uint32, ris_key: wp.uint32,
+def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, seed: wp.uint32, ris_key: wp.uint32,
                     index_base: int, acc: BasePath) -> BasePath:
     """Trace one base path from the primary hit x0 with random-number key `seed` and stream its
     events into acc (event indices index_base + 2k + {0, 1}; selections drawn from ris_key)."""

@@ -1,5 +1,5 @@
-"""The shift of a path sample into another pixel's domain: (source path, destination primary hit)
--> (the path in the destination, its Jacobian J, valid). One function for every shift kind and
+"""The shift of a path sample into another pixel's domain: (source path, destination domain: a
+primary hit, or a prefix end) -> (the path in the destination, its Jacobian J, valid). One function for every shift kind and
 both directions of every MIS weight (ALGORITHMS.md 3.2-3.4).
 
 The destination path replays the source's random numbers from the destination's primary hit
@@ -43,7 +43,8 @@ from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
 from .base_path import bounce_dim, found_along
-from .params import SHIFT_HYBRID, PTRParams
+from .domain import Domain
+from .params import SHIFT_HYBRID, PathReuseParams
 from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, PathReservoir, ends_with_nee, holds_path, lobe_at_rc,
                           lobe_at_rc_prev, path_length, rc_kind, rc_length)
 from .rc_criteria import (segment, eval_lobe, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex,
@@ -101,7 +102,7 @@ def make_shift(mutation: str = "none"):
     check_destination = mutation != "skip_destination_criteria"
 
     @wp.func(module=module)
-    def replay_prefix(scene: SceneDevice, params: PTRParams, x0: Shading, seed: wp.uint32, n: int) -> Replay:
+    def replay_prefix(scene: SceneDevice, params: PathReuseParams, x0: Shading, seed: wp.uint32, n: int) -> Replay:
         """Replay n bounces from x0 with the source path's numbers; invalid when a bounce fails,
         escapes, or reaches a vertex that would be the destination path's rc vertex."""
         y = Replay()
@@ -141,7 +142,7 @@ def make_shift(mutation: str = "none"):
         return y
 
     @wp.func(module=module)
-    def replay_end(scene: SceneDevice, params: PTRParams, r: PathReservoir, y: Replay) -> ShiftResult:
+    def replay_end(scene: SceneDevice, params: PathReuseParams, r: PathReservoir, y: Replay) -> ShiftResult:
         """A path without an rc vertex, replayed to its last vertex y: its end event there (J = 1)."""
         res = ShiftResult()
         j = path_length(r.flags)
@@ -184,7 +185,7 @@ def make_shift(mutation: str = "none"):
         return res
 
     @wp.func(module=module)
-    def reconnect(scene: SceneDevice, params: PTRParams, r: PathReservoir, y: Replay) -> ShiftResult:
+    def reconnect(scene: SceneDevice, params: PathReuseParams, r: PathReservoir, y: Replay) -> ShiftResult:
         """Connect the destination's rcPrev y to the source's rc vertex z and keep the rest."""
         res = ShiftResult()
         flags = r.flags
@@ -289,10 +290,11 @@ def make_shift(mutation: str = "none"):
     # every pair, the gather's techniques), inlined copies made the CUDA build of a module take
     # minutes; one call's overhead is nothing beside a shift's work.
     @wp.func(module=module, inline=False)
-    def shift_path(scene: SceneDevice, params: PTRParams, r: PathReservoir, dst: Shading) -> ShiftResult:
-        """r's path moved to the primary hit dst (see the module docstring); invalid if it fails."""
+    def shift_path(scene: SceneDevice, r: PathReservoir, dst: Domain) -> ShiftResult:
+        """r's path moved into the domain dst (see the module docstring); invalid if it fails."""
         res = ShiftResult()
-        if not holds_path(r) or dst.valid == 0:
+        params = dst.params
+        if not holds_path(r) or dst.sh.valid == 0:
             return res
         if path_length(r.flags) + 2 > params.max_depth:
             return res  # longer than the destination domain holds (suffix domains: max_depth - P)
@@ -300,7 +302,7 @@ def make_shift(mutation: str = "none"):
         n = path_length(r.flags)
         if rcl != NO_RC:
             n = rcl - 1
-        y = replay_prefix(scene, params, dst, r.seed, n)
+        y = replay_prefix(scene, params, dst.sh, r.seed, n)
         if y.valid == 0:
             res.rays = y.rays
             return res

@@ -10,8 +10,8 @@ from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.reuse_domains import resolve_spatial_radius
-from ..restir_di.component import attach_direct_light, check_di_settings
-from .params import SHIFTS, PTRParams
+from .direct_light import attach_direct_light, check_di_settings
+from .params import SHIFTS, PathReuseParams
 
 PT_MAX_DEPTH = 64  # max_depth -1 renders at this depth (path lengths are 8-bit fields)
 
@@ -97,10 +97,10 @@ class PathReuseIntegrator(Integrator):
         self.first_event = 1 if s["direct"] == "restir-di" else 0
         self.resamples = s["max_depth"] >= self.first_event + 2
 
-    def pt_params(self, frame: int, sample: int, near_distance: float, temporal_cap: float) -> PTRParams:
+    def pt_params(self, frame: int, sample: int, near_distance: float, temporal_cap: float) -> PathReuseParams:
         """The frame's ReSTIR PT parameters (the path samples' shift, rc criteria and reuse)."""
         s = self.settings
-        p = PTRParams()
+        p = PathReuseParams()
         p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
         p.frame = wp.uint32(frame)
         p.sample = sample

@@ -1,0 +1,5 @@
+"""The Warp module of ReSTIR PT's shipped stage kernels: one module, so that the code they share
+(the base path, the shift) is compiled once, not once per stage file (the CUDA compile check takes
+minutes per module). Fault-injected builds go to modules of their own."""
+
+KERNEL_MODULE = "restir_pt"
