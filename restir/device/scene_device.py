@@ -71,19 +71,9 @@ def texture_bilinear(scene: SceneDevice, tex: int, uv: wp.vec2) -> wp.vec3:
 
 
 @wp.func
-def texture_or_constant(scene: SceneDevice, tex: int, uv: wp.vec2, constant: wp.vec3) -> wp.vec3:
-    if tex >= 0:
-        return texture_bilinear(scene, tex, uv)
-    return constant
-
-
-@wp.func
 def material_at(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
-    """The triangle's material with textured parameters resolved at uv: the one place textures
-    are read (a BSDF sees constants), so a parameter becomes texturable here and in the loader
-    (scene.py `spectrum`), not in every material kind."""
+    """The triangle's material with textured parameters resolved at uv."""
     m = scene.materials[scene.tri_material[tri]]
-    m.reflectance = texture_or_constant(scene, m.reflectance_tex, uv, m.reflectance)
-    m.specular_reflectance = texture_or_constant(scene, m.specular_reflectance_tex, uv, m.specular_reflectance)
-    m.specular_transmittance = texture_or_constant(scene, m.specular_transmittance_tex, uv, m.specular_transmittance)
+    if m.reflectance_tex >= 0:
+        m.reflectance = texture_bilinear(scene, m.reflectance_tex, uv)
     return m

@@ -39,7 +39,7 @@ class MaterialDesc:
     kind: str
     twosided: bool = False
     reflectance: np.ndarray = field(default_factory=lambda: np.full(3, 0.5))
-    textures: dict = field(default_factory=dict)  # parameter (TEXTURED_PARAMETERS) -> texture index
+    reflectance_tex: int = -1
     specular_reflectance: np.ndarray = field(default_factory=lambda: np.ones(3))
     specular_transmittance: np.ndarray = field(default_factory=lambda: np.ones(3))
     eta: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -313,7 +313,12 @@ class _Builder:
         if t == "twosided":
             raise SceneError("nested twosided BSDFs are not supported", p.loc)
         if t == "diffuse":
-            self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))
+            r = p.color_or_texture("reflectance", np.full(3, 0.5))
+            if isinstance(r, dict):
+                m.reflectance_tex = self.texture(r)
+                m.reflectance = np.ones(3)
+            else:
+                m.reflectance = r
         if t in ("conductor", "roughconductor"):
             material = p.string("material", "none")
             if p.has("eta") or material == "none":
@@ -321,23 +326,31 @@ class _Builder:
                 m.k = p.rgb("k", np.ones(3))
             else:
                 raise SceneError(f"named conductor material '{material}' is not supported; give eta and k", p.loc)
-            self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
         if t in ("dielectric", "thindielectric", "roughdielectric"):
             int_ior = self.ior(p, "int_ior", 1.5046)
             ext_ior = self.ior(p, "ext_ior", 1.000277)
             if int_ior <= 0 or ext_ior <= 0:
                 raise SceneError("IORs must be positive", p.loc)
             m.ior = int_ior / ext_ior
-            self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
-            self.spectrum(p, m, "specular_transmittance", "specular_transmittance", np.ones(3))
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+            m.specular_transmittance = p.rgb("specular_transmittance", np.ones(3))
         if t in ("plastic", "roughplastic"):
             int_ior = self.ior(p, "int_ior", IOR_TABLE["polypropylene"])
             ext_ior = self.ior(p, "ext_ior", IOR_TABLE["air"])
             if int_ior <= 0 or ext_ior <= 0:
                 raise SceneError("IORs must be positive", p.loc)
             m.ior = int_ior / ext_ior
-            d_mean = self.spectrum(p, m, "diffuse_reflectance", "reflectance", np.full(3, 0.5))
-            s_mean = self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
+            r = p.color_or_texture("diffuse_reflectance", np.full(3, 0.5))
+            if isinstance(r, dict):
+                m.reflectance_tex = self.texture(r)
+                m.reflectance = np.ones(3)
+                d_mean = float(self.textures[m.reflectance_tex].mean())
+            else:
+                m.reflectance = r
+                d_mean = float(np.mean(r))
+            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+            s_mean = float(np.mean(m.specular_reflectance))
             m.specular_sampling_weight = s_mean / (d_mean + s_mean)
             m.nonlinear = p.bool("nonlinear", False)
             if t == "plastic":
@@ -372,18 +385,6 @@ class _Builder:
                 p.bool("sample_visible")
         p.warn_unqueried()
         return m
-
-    def spectrum(self, p: Props, m: MaterialDesc, name: str, param: str, default: np.ndarray) -> float:
-        """The RGB parameter `name` of the BSDF into the material's `param` (a constant, or a
-        texture index that the device resolves at each hit: scene_device.material_at); returns
-        its mean value (of the texture's texels if textured), which sampling weights use."""
-        v = p.color_or_texture(name, default)
-        if isinstance(v, dict):
-            m.textures[param] = self.texture(v)
-            setattr(m, param, np.ones(3))
-            return float(self.textures[m.textures[param]].mean())
-        setattr(m, param, v)
-        return float(np.mean(v))
 
     def texture(self, obj) -> int:
         p = self.props(obj, "texture")
