@@ -13,12 +13,12 @@ positions as the radiance.
 import numpy as np
 import warp as wp
 
+from .config import AOVS
 from .device.camera import Camera, camera_ray
 from .device.intersect import T_MAX, trace_closest
 from .device.scene_device import SceneDevice, material_at
 from .device.types import MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC
 
-AOVS = ("albedo", "normal")
 AOV_SAMPLES = 64
 CHANNELS = {"albedo": ("R", "G", "B"), "normal": ("X", "Y", "Z")}
 
@@ -48,16 +48,6 @@ def aov_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32,
         n = n / wsum
     albedo[pixel] = a
     normal[pixel] = n
-
-
-def parse_aovs(text: str) -> tuple:
-    from .config import ConfigError
-
-    names = tuple(s.strip() for s in text.split(",") if s.strip())
-    bad = [n for n in names if n not in AOVS]
-    if bad or not names:
-        raise ConfigError(f"--aov {text}: unknown AOV {', '.join(bad) or '(none given)'} (available: {', '.join(AOVS)})")
-    return names
 
 
 def compute_aovs(integrator, names, frames: int) -> dict:

@@ -320,7 +320,7 @@ def _render(args) -> int:
     from .image_io import write_exr, write_image, write_png
 
     console = Console(stderr=True, quiet=args.quiet)
-    from .aov import parse_aovs
+    from .config import parse_aovs
 
     aovs = parse_aovs(args.aov) if args.aov else ()
     config = RenderConfig(method=args.method, spp=args.spp, frames=args.frames, width=args.width,

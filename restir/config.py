@@ -10,6 +10,24 @@ class ConfigError(ValueError):
     pass
 
 
+AOVS = ("albedo", "normal")  # the extra outputs a render can write (restir/aov.py computes them)
+
+
+def check_aovs(names, given: str | None = None) -> tuple:
+    """The AOV names, checked: an unknown name (or none, from --aov) is an error naming them."""
+    names = tuple(names)
+    bad = [n for n in names if n not in AOVS]
+    if bad or (given is not None and not names):
+        where = f"--aov {given}: " if given is not None else ""
+        raise ConfigError(f"{where}unknown AOV {', '.join(bad) or '(none given)'} (available: {', '.join(AOVS)})")
+    return names
+
+
+def parse_aovs(text: str) -> tuple:
+    """--aov albedo,normal -> ("albedo", "normal")."""
+    return check_aovs((s.strip() for s in text.split(",") if s.strip()), given=text)
+
+
 @dataclass
 class RenderConfig:
     method: str = "pt"
@@ -46,11 +64,7 @@ class RenderConfig:
             raise ConfigError("tracer must be auto, embree or warp")
         if not 0 <= self.seed < 2**32:
             raise ConfigError("seed must be in [0, 2^32)")
-        from .aov import AOVS
-
-        bad = [a for a in self.aovs if a not in AOVS]
-        if bad:
-            raise ConfigError(f"unknown AOV {', '.join(bad)} (available: {', '.join(AOVS)})")
+        check_aovs(self.aovs)
 
 
 def parse_value(text: str, like):
