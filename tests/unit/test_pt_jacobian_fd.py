@@ -35,8 +35,7 @@ import warp as wp
 
 import restir
 from restir.api import make_integrator
-from restir.device.bsdf import Material, bsdf_sample
-from restir.device.bsdfs.material import microfacet_of
+from restir.device.bsdf import Material, bsdf_sample, microfacet_of
 from restir.device.intersect import T_MAX, surface_at, trace_closest
 from restir.device.microfacet import Microfacet, microfacet_sample, microfacet_sample_to_square
 from restir.device.path_steps import scatter
