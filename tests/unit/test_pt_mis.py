@@ -89,7 +89,8 @@ def make_mis_kernel(shift):
             d_j_at_y = float(0.0)
             d_c_at_y = float(0.0)
             if own.t.valid != 0:
-                back = shift_in(scene, with_confidence(own.t.r, M_j), M_j, M_c, domain_at(sc, params))  # as the pass shifts x_j here
+                # as the pass shifts x_j here
+                back = shift_in(scene, with_confidence(own.t.r, M_j), M_j, M_c, domain_at(sc, params))
                 d_j_at_y = back.d_i
                 d_c_at_y = back.d_c
                 producing += 1

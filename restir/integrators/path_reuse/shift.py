@@ -1,8 +1,8 @@
 """The shift of a path sample into another pixel's domain: (source path, destination domain: a
-primary hit, or a prefix end) -> (the path in the destination, its Jacobian J, valid). One function for every shift kind and
-both directions of every MIS weight (ALGORITHMS.md 3.2-3.4).
+primary hit, or a prefix end) -> (the path in the destination, its Jacobian J, valid). One
+function for every shift kind and both directions of every MIS weight (ALGORITHMS.md 3.2-3.4).
 
-The destination path replays the source's random numbers from the destination's primary hit
+The destination path replays the source's random numbers from the destination's start vertex
 (the same (seed, dim) pairs, so the same numbers whatever the replay skips: 6 item 10) up to
 rcPrev, the vertex before the rc vertex z; then reconnects to z, which both paths share, and
 keeps everything after z. A path without an rc vertex is replayed to its end (J = 1).
