@@ -76,7 +76,7 @@ def query_ms(scene, size, max_depth, settings=None):
     from restir.integrators.common.shading import load_shading
     from restir.integrators.suffix_restir.params import SRParams
     from restir.integrators.suffix_restir.prefix import trace_prefix
-    from restir.integrators.suffix_restir.search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_slots,
+    from restir.integrators.suffix_restir.s2_search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_slots,
                                                          nearest_prefix_ends)
     from restir.parallel import launch_pixels
 

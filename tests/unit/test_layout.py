@@ -83,3 +83,18 @@ def test_methods_do_not_import_each_other():
             continue
         bad += [(m, d) for d in deps for k in METHODS if k != own and f".integrators.{k}" in d]
     assert not bad, bad
+
+
+def test_stage_files_numbered_from_s1_in_order():
+    """One numbering convention (docs/new_method.md): a method's own stage files are s1_*.py,
+    s2_*.py, ... without gaps or repeats (numbered in the order the pipeline runs them; the shared
+    primary hits and the direct-light component are not numbered), and the pipeline imports each."""
+    import re
+
+    for method in METHODS:
+        folder = os.path.join(ROOT, "integrators", method)
+        stages = sorted((int(m.group(1)), f) for f in os.listdir(folder) if (m := re.match(r"s(\d+)_\w+\.py$", f)))
+        assert [n for n, _ in stages] == list(range(1, len(stages) + 1)), (method, stages)
+        pipeline = open(os.path.join(folder, "pipeline.py")).read()
+        for _, f in stages:
+            assert f"from .{f[:-3]} import" in pipeline, (method, f)

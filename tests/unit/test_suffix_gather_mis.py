@@ -1,6 +1,6 @@
 """D1 for the final gather (TESTING.md 5.3; docs/suffix_restir.md, "The final gather"): for a suffix
 y of a fresh prefix's domain, the weights the gather gives y from every technique that can
-produce it sum to 1, computed by the gather's own functions (s6_gather.make_gather:
+produce it sum to 1, computed by the gather's own functions (s5_gather.make_gather:
 neighbor_term, canonical_weight) with real shifts, on real frames of Suffix ReSTIR (its search
 structure, prefixes and suffix reservoirs).
 
@@ -27,8 +27,8 @@ from restir.integrators.path_reuse.shift import shift_path
 from restir.integrators.suffix_restir.domains import Domain, load_domain, suffix_params
 from restir.integrators.suffix_restir.params import SRParams
 from restir.integrators.suffix_restir.prefix import PrefixReservoir, prefix_end_shading, trace_prefix
-from restir.integrators.suffix_restir.s6_gather import canonical_suffix, fill_slots, make_gather
-from restir.integrators.suffix_restir.search import NO_PIXEL, SearchStructure, nearest_prefix_ends
+from restir.integrators.suffix_restir.s5_gather import canonical_suffix, fill_slots, make_gather
+from restir.integrators.suffix_restir.s2_search import NO_PIXEL, SearchStructure, nearest_prefix_ends
 
 TOL = 1e-4
 N_OUT = 4  # [tested, sum of weights, techniques that produce y besides the canonical, slots whose reservoir is empty]

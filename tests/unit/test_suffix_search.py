@@ -1,4 +1,4 @@
-"""The prefix search structure (search.py): the sorted grid, the hash grid and the BVH find the same
+"""The prefix search structure (s2_search.py): the sorted grid, the hash grid and the BVH find the same
 neighbours, and those are exactly the ones a brute-force scan over every pixel's box finds (the box holds
 the query point, the centre lies within its half-diagonal, closest first, none at distance 0),
 on the resampled prefix ends of a real frame, queried at fresh prefix ends. (Ties: pixels that
@@ -17,7 +17,7 @@ from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
 from restir.integrators.suffix_restir.params import SRParams
 from restir.integrators.suffix_restir.prefix import trace_prefix
-from restir.integrators.suffix_restir.search import SEARCHES, SearchStructure, nearest_prefix_ends
+from restir.integrators.suffix_restir.s2_search import SEARCHES, SearchStructure, nearest_prefix_ends
 
 M = 4
 

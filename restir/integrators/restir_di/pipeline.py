@@ -14,11 +14,11 @@ from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
 from .params import DIParams
 from .reservoir import DIReservoir
-from .s2_initial import initial_kernel
-from .s3_visibility import visibility_kernel
-from .s4_temporal import make_temporal_kernel, temporal_kernel
-from .s5_spatial import make_spatial_kernel, spatial_kernel
-from .s6_shade import shade_kernel
+from .s1_initial import initial_kernel
+from .s2_visibility import visibility_kernel
+from .s3_temporal import make_temporal_kernel, temporal_kernel
+from .s4_spatial import make_spatial_kernel, spatial_kernel
+from .s5_shade import shade_kernel
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of the stage kernels
 # (or, for the race, of the pipeline) that the harness refuses unless asked. The shipped kernels

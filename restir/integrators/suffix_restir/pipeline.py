@@ -19,9 +19,9 @@ from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
 from .s1_prefix import prefix_kernel
 from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
-from .s5_suffix_spatial import suffix_spatial_kernel
-from .s6_gather import GATHER_MUTATIONS, gather_kernel, make_gather
-from .search import SEARCHES, GridEntry, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
+from .s4_suffix_spatial import suffix_spatial_kernel
+from .s5_gather import GATHER_MUTATIONS, gather_kernel, make_gather
+from .s2_search import SEARCHES, GridEntry, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
 
 # Fault injections for the mutation tests (TESTING.md 5.11), each a build of a stage kernel that
 # the harness refuses unless asked; the shipped kernels are built with none of them.
@@ -232,7 +232,7 @@ class SuffixReSTIR(PathReuseIntegrator):
                 self.search.id = self.structure.id
 
     def build_grid(self) -> None:
-        """The sorted grid (search.py): the query's half-size r (the largest box's, widened by a
+        """The sorted grid (s2_search.py): the query's half-size r (the largest box's, widened by a
         relative 1e-5 so that rounding cannot leave a candidate's cell out) and cells of 2.02 r
         (so [x - r, x + r] spans at most 2 cells an axis); then each box's slot, a stable sort by
         slot, the boxes copied into that order and the table of each slot's range of entries."""

@@ -3,7 +3,7 @@
 Per pixel, N fresh prefixes from the primary hit (their own numbers, drawn independently of every
 reservoir of the frame). Prefix i's internal events are summed; if it has an end x_q, its suffix
 domain gathers M neighbour suffix reservoirs from the pixels whose resampled prefix ends lie near
-x_q (search.py; unfilled slots: random pixels with a prefix end in a screen disk), and prefix 0
+x_q (s2_search.py; unfilled slots: random pixels with a prefix end in a screen disk), and prefix 0
 also traces the canonical suffix there (M_c = 1). The neighbours' confidences are capped at
 gather_cap. MIS over the neighbour techniques and the canonical one (generalized balance by
 default; pairwise with the canonical technique as an option), with the canonical technique in
@@ -38,7 +38,7 @@ from ..path_reuse.shift import shift_path
 from .domains import Domain, load_domain, suffix_params
 from .params import GATHER_TALBOT, KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, has_prefix, prefix_end_shading, trace_prefix
-from .search import NO_PIXEL, SearchStructure, Slots, nearest_prefix_ends
+from .s2_search import NO_PIXEL, SearchStructure, Slots, nearest_prefix_ends
 
 
 @wp.func
