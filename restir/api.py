@@ -232,7 +232,7 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
         raise ConfigError(f"unknown method '{config.method}' (available: {', '.join(METHODS)})")
     cls = METHODS[config.method]
     settings = method_settings(cls.SETTINGS, config.settings)
-    fixed = getattr(cls, "FIXED_MAX_DEPTH", None)
+    fixed = cls.FIXED_MAX_DEPTH
     if fixed is not None and config.max_depth not in (None, fixed):
         raise ConfigError(f"method '{config.method}' computes max_depth {fixed} (direct illumination) only")
     max_depth = fixed or (config.max_depth if config.max_depth is not None else scene.max_depth)

@@ -26,6 +26,7 @@ import numpy as np
 from ..config import ConfigError, RenderConfig, method_settings
 from . import metrics
 from . import structure
+from .config import CompareConfig
 from .frames import FrameStats
 from .reference import Reference, load_reference_file, path_traced_reference
 
@@ -222,116 +223,71 @@ def _run_in_turn(scene, specs, base, reference, budget, warmup, progress, result
     return True
 
 
-def compare(scene, methods, *, reference: str | None = None, reference_spp: int = 1024,
-            equal_time: float | None = None, equal_spp: int | None = None, frames: int = 16, warmup: int = 4,
-            seed: int = 0, width: int | None = None, height: int | None = None, max_depth: int | None = None,
-            device: str = "cpu", progress=None, workers: int | None = None, ray: str | None = None,
-            denoise: bool = False, scene_file: str | None = None, defines: dict | None = None,
-            correlation_runs: int = 8, match_frame_time: bool = True) -> Comparison:
+def compare(scene, methods, config: CompareConfig | None = None, *, progress=None, **options) -> Comparison:
     """Render every method in `methods` (MethodSpec or 'name:key=value,...' strings) on `scene`
     with the same budget and measure each against the reference.
 
-    reference: an image file (EXR, PNG, NPY) of the same size, None for the path tracer at
-    `reference_spp`, or "mitsuba" for Mitsuba 3 at `reference_spp` on `scene_file` (the XML the
-    scene was loaded from, with its `defines`); both cached, see reference.py. Budget: `equal_time` seconds of frames per method,
-    or `equal_spp` samples per pixel in total, or `frames` frames each (also the cap on frames under
-    equal time, when given explicitly as more than the default). `progress(label, fraction)` is
-    called after every frame (label "reference" while the reference renders).
+    config: a CompareConfig (the budget, reference, size, denoising, where renders run); or its
+    fields as keyword `options` (compare(scene, ["pt"], frames=4)), or both (the options then
+    replace those fields). `progress(label, fraction)` is called after every frame (label
+    "reference" while the reference renders).
 
     Each MethodResult.metrics holds relmse_frame (mean over frames after `warmup`),
     relmse_accumulated, mape, flip (None without flip-evaluator), mean_ratio with mean_z and
     mean_mdb (the image-level bias test; None with fewer than 2 blocks), ms_per_frame,
     correlation_factor (per block size, mean over the frames after `warmup`) and
-    temporal_correlation (structure.py).
-
-    match_frame_time (equal time only): the path tracer is also rendered, with the same budget, at
-    each other method's frame time (spp from a fit of its frame time, equal_time.py; methods whose
-    frame times give the same spp share one), the per-frame baseline of `Comparison.headline`.
-    Its settings are those of the first `pt` method given, if any.
-
-    correlation_runs K >= 3 (0: none): every method (the matched path tracers too) is also rendered
-    K times with seeds seed + 1 .. seed + K for warmup + 1 frames; MethodResult.radial has the
-    radial correlation of those last frames (structure.radial_correlation).
-
-    workers (default: one per core, and at equal time 1 for the methods) > 1 or ray: independent
-    renders run as tasks (restir/fanout.py): the methods (equal samples or frames only: an
-    equal-time comparison needs each method alone on the machine; their ms per frame are then
-    measured under each other's load) and the correlation runs.
-
-    denoise: the frames after the warm-up (all, or an evenly spaced subset of 9 to 16: denoise.py)
-    and the last frame are denoised by Intel Open Image Denoise (the `pyoidn` package, the
-    `denoise` extra) with albedo and normal guides (restir/aov.py), the real-time use of ReSTIR;
-    metrics relmse_denoised_frame and flip_denoised_frame are means over those frames, with
-    relmse_frame_subset and flip_frame of the same frames raw; MethodResult.denoised is the
-    last frame denoised.
+    temporal_correlation (structure.py). With `denoise`: relmse_denoised_frame and
+    flip_denoised_frame, means over the denoised frames, with relmse_frame_subset and flip_frame
+    of the same frames raw; MethodResult.denoised is the last frame denoised.
     """
     from ..api import check_device, sized_scene
     from ..fanout import default_workers
 
+    unknown = set(options) - {f.name for f in dataclasses.fields(CompareConfig)}
+    if unknown:
+        raise TypeError(f"compare() got unknown options {sorted(unknown)} (CompareConfig's fields are the options)")
+    c = dataclasses.replace(config or CompareConfig(), **options)
     specs = [m if isinstance(m, MethodSpec) else MethodSpec.parse(m) for m in methods]
     if not specs:
         raise ConfigError("compare needs at least one --method")
     if len({s.label for s in specs}) != len(specs):
         raise ConfigError("the same --method is given twice")
-    if equal_time is not None and equal_spp is not None:
-        raise ConfigError("give --equal-time or --equal-spp, not both")
-    if equal_time is not None and not equal_time > 0:
-        raise ConfigError("--equal-time must be > 0 seconds")
-    if equal_spp is not None and equal_spp < 1:
-        raise ConfigError("--equal-spp must be >= 1")
-    if correlation_runs != 0 and correlation_runs < 3:
-        raise ConfigError(f"--correlation-runs {correlation_runs}: the radial correlation needs at least 3 "
-                          "independent runs (0: none)")
-    if workers is not None and workers < 1:
-        raise ConfigError("--workers must be >= 1")
-    if equal_time is not None and (ray is not None or (workers or 1) > 1) and not correlation_runs:
-        raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
-                          "its time would include the others' load); --workers and --ray apply to equal "
-                          "samples or frames, and to the correlation runs")
-    method_workers = workers or (1 if equal_time is not None else min(default_workers(), len(specs)))
-    fan_out = equal_time is None and (ray is not None or method_workers > 1)
-    if denoise:
-        from .denoise import require_oidn
-
-        require_oidn()
-    if frames < 1 or warmup < 0 or reference_spp < 1:
-        raise ConfigError("frames and reference spp must be >= 1, warmup >= 0")
+    c.validate()
+    method_workers = c.workers or (1 if c.equal_time is not None else min(default_workers(), len(specs)))
+    fan_out = c.equal_time is None and (c.ray is not None or method_workers > 1)
     from ..integrators import METHODS
 
     notes = []
-    fixed = {getattr(METHODS[s.method], "FIXED_MAX_DEPTH", None) for s in specs} - {None}
+    max_depth = c.max_depth
+    fixed = {METHODS[s.method].FIXED_MAX_DEPTH for s in specs} - {None}
     for depth in fixed:  # restir-di computes max_depth 2 only: everything is compared at that depth
         if max_depth is not None and max_depth != depth:
             raise ConfigError(f"max_depth {max_depth}: "
-                              f"{', '.join(s.label for s in specs if getattr(METHODS[s.method], 'FIXED_MAX_DEPTH', None))} "
+                              f"{', '.join(s.label for s in specs if METHODS[s.method].FIXED_MAX_DEPTH is not None)} "
                               f"computes max_depth {depth} only")
         if max_depth is None:
             notes.append(f"every method and the reference at max_depth {depth}, the only depth of "
-                         + ", ".join(s.label for s in specs if getattr(METHODS[s.method], "FIXED_MAX_DEPTH", None)))
+                         + ", ".join(s.label for s in specs if METHODS[s.method].FIXED_MAX_DEPTH is not None))
         max_depth = depth
-    base = RenderConfig(frames=10 ** 9 if equal_time is not None else frames, width=width, height=height,
-                        max_depth=max_depth, seed=seed, device=device)
+    base = RenderConfig(frames=10 ** 9 if c.equal_time is not None else c.frames, width=c.width, height=c.height,
+                        max_depth=max_depth, seed=c.seed, device=c.device)
     base.validate()
     check_device(base)
     sized = sized_scene(scene, base)
     w, h = sized.camera.width, sized.camera.height
     base = dataclasses.replace(base, width=w, height=h)
-    if reference == "mitsuba":
+    if c.reference == "mitsuba":
         from .reference import mitsuba_reference
 
-        ref = mitsuba_reference(scene, scene_file, defines, reference_spp,
-                                dataclasses.replace(base, width=width, height=height, max_depth=max_depth))
-    elif reference is not None:
-        ref = load_reference_file(reference, w, h)
+        ref = mitsuba_reference(scene, c.scene_file, c.defines, c.reference_spp,
+                                dataclasses.replace(base, width=c.width, height=c.height, max_depth=max_depth))
+    elif c.reference is not None:
+        ref = load_reference_file(c.reference, w, h)
     else:
-        ref = path_traced_reference(scene, reference_spp, base,
+        ref = path_traced_reference(scene, c.reference_spp, base,
                                     progress=(lambda done, total: progress("reference", done / total)) if progress else None)
-    if equal_time is not None:
-        budget, text = ("time", equal_time), f"equal time: {equal_time:g} s of frames per method"
-    elif equal_spp is not None:
-        budget, text = ("spp", equal_spp), f"equal samples: {equal_spp} spp per pixel per method"
-    else:
-        budget, text = ("frames", frames), f"{frames} frames per method"
+    budget, text = c.budget()
+    warmup = c.warmup
     comparison = Comparison(scene.name, w, h, text, warmup, ref, [], notes)
     own = ref.own_relmse()
     if own is not None:
@@ -339,17 +295,18 @@ def compare(scene, methods, *, reference: str | None = None, reference_spp: int 
                      "blocks); every relMSE here includes it, so values near it (denoised frames, long "
                      "accumulations) are not resolved: raise --reference-spp")
     if fan_out:
-        comparison.methods = _fan_out(scene, specs, base, ref, budget, warmup, method_workers, ray, progress)
+        comparison.methods = _fan_out(scene, specs, base, ref, budget, warmup, method_workers, c.ray, progress)
         complete = True
     else:
         complete = _run_in_turn(scene, specs, base, ref, budget, warmup, progress, comparison.methods, notes)
         if not comparison.methods:  # Ctrl-C before the first method's first frame: nothing to keep
             raise KeyboardInterrupt
-    if complete and equal_time is not None and match_frame_time:
+    if complete and c.equal_time is not None and c.match_frame_time:
         complete = _match_frame_time(scene, specs, base, ref, budget, warmup, progress, comparison)
-    if complete and correlation_runs:
-        complete = _radial(scene, comparison.methods, base, warmup, correlation_runs, workers, ray, progress, notes)
-    if complete and denoise:
+    if complete and c.correlation_runs:
+        complete = _radial(scene, comparison.methods, base, warmup, c.correlation_runs, c.workers, c.ray, progress,
+                           notes)
+    if complete and c.denoise:
         complete = _denoise(scene, base, comparison.methods, ref, progress, notes)
     comparison.interrupted = not complete
     from .headline import headline

@@ -86,7 +86,7 @@ def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: in
     from ..integrators import METHODS
 
     ref_cfg = base
-    fixed = getattr(METHODS[method], "FIXED_MAX_DEPTH", None)
+    fixed = METHODS[method].FIXED_MAX_DEPTH
     if fixed is not None and max_depth is None:
         ref_cfg = dataclasses.replace(base, max_depth=fixed)
     if reference is not None:

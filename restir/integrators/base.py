@@ -24,7 +24,14 @@ COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compilin
 class Integrator:
     """Base class. Subclasses list STAGES and implement `render_frame` as a table of contents."""
 
+    # The method protocol: what `restir info`, the config checks, compare and validate read of a
+    # method (class attributes, so no render is needed to read them).
     name = "base"
+    DESCRIPTION = ""        # one line for `restir info`
+    SETTINGS: dict = {}     # --set KEY=VALUE defaults
+    SETTINGS_DOC: dict = {}  # one line per setting (a test requires one for each)
+    FIXED_MAX_DEPTH: int | None = None  # the only max_depth the method computes, or None: any
+    MUTATIONS: tuple = ("none",)  # fault injections of debug.mutation (TESTING.md 5.11)
     stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed

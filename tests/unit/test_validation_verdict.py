@@ -21,8 +21,8 @@ class Runs:
 def test_default_bound_is_five_percent():
     from restir import cli
 
-    assert DEFAULT_MAX_MDB == 0.05 and cli._fraction(cli.DEFAULT_MAX_MDB) == DEFAULT_MAX_MDB
-    assert cli._fraction("0.05") == cli._fraction("5%") == 0.05
+    assert DEFAULT_MAX_MDB == 0.05 and cli.fraction(cli.DEFAULT_MAX_MDB) == DEFAULT_MAX_MDB
+    assert cli.fraction("0.05") == cli.fraction("5%") == 0.05
 
 
 @pytest.mark.parametrize("mdb,verdict", [(0.01, "pass"), (0.05, "pass"), (0.0501, "inconclusive"),

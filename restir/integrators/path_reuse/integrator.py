@@ -38,7 +38,6 @@ class PathReuseIntegrator(Integrator):
     SPATIAL_KEYS = ("spatial.rounds", "spatial.neighbors", "spatial.radius")
     PASS_BUFFER = True  # a third path-reservoir buffer for the reuse passes' output (ping-pong)
     SPATIAL_RADIUS_1080 = 20.0
-    MUTATIONS: tuple = ("none",)
 
     @classmethod
     def check_path_settings(cls, settings: dict) -> None:

@@ -1,0 +1,45 @@
+"""Command line: `restir COMMAND ...` (the contract in DESIGN.md "Command line"), one module per
+command (render, validate, compare, sweep, info: each `add_parser(sub)` and `run(args)`) and
+common.py for what they share.
+
+Arguments are parsed into the API's configs; user errors print one line (`file:line: error:
+...`, or `restir render: error: ...` for a bad argument) and exit with status 2, never a
+traceback. Output paths are checked before any work is done.
+"""
+import sys
+
+from ..config import ConfigError
+from ..scene.errors import SceneError
+from . import compare, info, render, sweep, validate
+from .common import DEFAULT_MAX_MDB, Parser, fraction
+
+COMMANDS = {"render": render, "info": info, "validate": validate, "compare": compare, "sweep": sweep}
+__all__ = ["main", "build_parser", "COMMANDS", "DEFAULT_MAX_MDB", "fraction"]
+
+
+def build_parser() -> Parser:
+    from .. import __version__
+
+    ap = Parser(prog="restir", description="Research renderer for resampled path tracing.")
+    ap.add_argument("--version", action="version", version=f"restir {__version__}")
+    sub = ap.add_subparsers(dest="command", required=True)
+    for command in COMMANDS.values():
+        command.add_parser(sub)
+    return ap
+
+
+def main(argv=None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:  # --help, --version (0) and one-line argument errors (2)
+        return e.code if isinstance(e.code, int) else 0 if e.code is None else 2
+    try:
+        return COMMANDS[args.command].run(args)
+    except (SceneError, ConfigError) as e:
+        msg = e.message if isinstance(e, SceneError) else str(e)
+        loc = f"{e.loc}: " if isinstance(e, SceneError) and e.loc else ""
+        print(f"{loc}error: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
