@@ -25,3 +25,56 @@ def triangle(v, radiance=None, bsdf=None):
 def device_scene(tree: dict, device="cpu") -> DeviceScene:
     wp.init()
     return DeviceScene(build_scene(tree, "test"), device)
+
+
+def half_dark_scene():
+    """A floor lit by a light above it (facing down) and an equally bright light beside it facing
+    up, at nothing: about half of all light candidates have zero contribution (TESTING.md C6,
+    the target of defects A1 and A3). The camera looks at the floor from below the lights."""
+    from restir.scene.transforms import look_at
+
+    def quad(cx, y, s, up):
+        a, b, c, d = [cx - s, y, -s], [cx + s, y, -s], [cx + s, y, s], [cx - s, y, s]
+        tris = ([a, b, c], [a, c, d]) if up else ([a, c, b], [a, d, c])
+        return [triangle(t, [10, 10, 10]) for t in tris]
+
+    floor = [triangle([[-4, -1, -4], [4, -1, 4], [4, -1, -4]]), triangle([[-4, -1, -4], [-4, -1, 4], [4, -1, 4]])]
+    parts = floor + quad(0.0, 1.5, 0.6, up=False) + quad(3.0, 1.5, 0.6, up=True)
+    tree = {"type": "scene", "sensor": sensor(24, 24)}
+    tree["sensor"]["to_world"] = look_at([0, 0.3, -3.0], [0, -1, 0.5], [0, 1, 0])
+    tree.update({f"p{i}": part for i, part in enumerate(parts)})
+    return build_scene(tree, "half-dark")
+
+
+def shadow_scene():
+    """A floor under a large, close area light with blinds (four slats) between them: the light is
+    partly occluded almost everywhere, differently from pixel to pixel, and it is large enough
+    that BSDF sampling finds it about as often as light sampling does (where BSDF candidates and
+    visibility interact)."""
+    from restir.scene.transforms import look_at
+
+    def quad(y, s, radiance=None, down=True, z0=None, z1=None):
+        z0, z1 = (-s, s) if z0 is None else (z0, z1)
+        a, b, c, d = [-s, y, z0], [s, y, z0], [s, y, z1], [-s, y, z1]
+        tris = ([a, b, c], [a, c, d]) if down else ([a, c, b], [a, d, c])  # normal cross(p1-p0, p2-p0)
+        return [triangle(t, radiance) for t in tris]
+
+    floor = quad(-1.0, 4.0, down=False)
+    light = quad(1.2, 3.0, radiance=[2, 2, 2])
+    slats = [t for z in (-1.2, -0.5, 0.2, 0.9) for t in quad(0.2, 1.5, z0=z, z1=z + 0.35)]
+    plate = [dict(t, bsdf={"type": "twosided", "bsdf": {"type": "diffuse"}}) for t in slats]
+    tree = {"type": "scene", "sensor": sensor(24, 24)}
+    tree["sensor"]["to_world"] = look_at([0, 0.6, -3.0], [0, -1, 0.3], [0, 1, 0])
+    tree.update({f"p{i}": part for i, part in enumerate(floor + light + plate)})
+    return build_scene(tree, "shadow")
+
+
+def feature_scene():
+    """The feature scene (tests/data/feature_scene.py: every material kind, textures, the shapes)
+    loaded from a fresh temporary folder."""
+    import tempfile
+
+    import restir
+    from tests.data.feature_scene import write_feature_scene
+
+    return restir.load_scene(write_feature_scene(tempfile.mkdtemp()))

@@ -7,7 +7,7 @@ import pytest
 
 import restir
 from restir.scene.builtin import ANALYTIC_MAX_DEPTH, BUILTIN_DESCRIPTIONS, sphere_cap_radiance
-from tests.integration.test_path_tracer import ANALYTIC_REL_TOL, check
+from tests.helpers import ANALYTIC_REL_TOL, check
 
 
 @pytest.mark.parametrize("name", ["furnace", "sphere-cap"])

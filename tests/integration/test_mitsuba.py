@@ -18,7 +18,7 @@ import pytest
 
 import restir
 from restir.image_io import read_exr
-from tests.integration.test_path_tracer import check
+from tests.helpers import check
 from tests.shared_scenes import scene_path
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"

@@ -10,21 +10,10 @@ import pytest
 
 import restir
 from restir.scene.builtin import sphere_cap_radiance
-from restir.validation import assert_matches
+from tests.helpers import ANALYTIC_REL_TOL, check
 
 
 FRAMES = 32
-
-
-# Tessellated spheres and ray offsets (~1e-4 of the scene size) make the analytic answers
-# exact only to about 1e-4; the furnace estimators are so nearly deterministic that the tests
-# would detect that. Deviations below this margin count as zero in the analytic tests.
-ANALYTIC_REL_TOL = 5e-4
-
-
-def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0, other=None, abs_tol=0.0):
-    """Test r against a reference value/image; `other` is the reference's result when it is noisy."""
-    return assert_matches(r, reference, reference_var, other=other, tile=tile, rel_tol=rel_tol, abs_tol=abs_tol)
 
 
 def render(spec, device, strategy="mis", spp=4, max_depth=None, seed=0, frames=FRAMES, nee_samples=1, rr=False,

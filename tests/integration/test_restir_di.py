@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import restir
-from tests.integration.test_path_tracer import check
+from tests.helpers import check, check_no_trend, long_run_trend
+from tests.scenes import half_dark_scene, shadow_scene
 
 FRAMES = 32
 
@@ -33,52 +34,6 @@ def render(scene, method, spp, seed, size=24, **settings):
         assert r.stats["settings"]["debug.mutation"] == "none"  # the unbiased build, asserted
     assert not any(n for name, n in r.stats["counters"].items() if name.startswith("nonfinite")), r.stats["counters"]
     return r
-
-
-def half_dark_scene():
-    """A floor lit by a light above it (facing down) and an equally bright light beside it facing
-    up, at nothing: about half of all light candidates have zero contribution (TESTING.md C6,
-    the target of defects A1 and A3). The camera looks at the floor from below the lights."""
-    from restir.scene.scene import build_scene
-    from restir.scene.transforms import look_at
-    from tests.scenes import sensor, triangle
-
-    def quad(cx, y, s, up):
-        a, b, c, d = [cx - s, y, -s], [cx + s, y, -s], [cx + s, y, s], [cx - s, y, s]
-        tris = ([a, b, c], [a, c, d]) if up else ([a, c, b], [a, d, c])
-        return [triangle(t, [10, 10, 10]) for t in tris]
-
-    floor = [triangle([[-4, -1, -4], [4, -1, 4], [4, -1, -4]]), triangle([[-4, -1, -4], [-4, -1, 4], [4, -1, 4]])]
-    parts = floor + quad(0.0, 1.5, 0.6, up=False) + quad(3.0, 1.5, 0.6, up=True)
-    tree = {"type": "scene", "sensor": sensor(24, 24)}
-    tree["sensor"]["to_world"] = look_at([0, 0.3, -3.0], [0, -1, 0.5], [0, 1, 0])
-    tree.update({f"p{i}": part for i, part in enumerate(parts)})
-    return build_scene(tree, "half-dark")
-
-
-def shadow_scene():
-    """A floor under a large, close area light with blinds (four slats) between them: the light is
-    partly occluded almost everywhere, differently from pixel to pixel, and it is large enough
-    that BSDF sampling finds it about as often as light sampling does (where BSDF candidates and
-    visibility interact)."""
-    from restir.scene.scene import build_scene
-    from restir.scene.transforms import look_at
-    from tests.scenes import sensor, triangle
-
-    def quad(y, s, radiance=None, down=True, z0=None, z1=None):
-        z0, z1 = (-s, s) if z0 is None else (z0, z1)
-        a, b, c, d = [-s, y, z0], [s, y, z0], [s, y, z1], [-s, y, z1]
-        tris = ([a, b, c], [a, c, d]) if down else ([a, c, b], [a, d, c])  # normal cross(p1-p0, p2-p0)
-        return [triangle(t, radiance) for t in tris]
-
-    floor = quad(-1.0, 4.0, down=False)
-    light = quad(1.2, 3.0, radiance=[2, 2, 2])
-    slats = [t for z in (-1.2, -0.5, 0.2, 0.9) for t in quad(0.2, 1.5, z0=z, z1=z + 0.35)]
-    plate = [dict(t, bsdf={"type": "twosided", "bsdf": {"type": "diffuse"}}) for t in slats]
-    tree = {"type": "scene", "sensor": sensor(24, 24)}
-    tree["sensor"]["to_world"] = look_at([0, 0.6, -3.0], [0, -1, 0.3], [0, 1, 0])
-    tree.update({f"p{i}": part for i, part in enumerate(floor + light + plate)})
-    return build_scene(tree, "shadow")
 
 
 # (DI spp, PT spp, MDB bound): in the Cornell boxes the pixels on the edge of the small, bright
@@ -360,46 +315,6 @@ def test_every_frame_is_unbiased(tmp_path):
                        skew=skew, kurtosis=kurt)
         print("frame", t, f"MDB {100 * rep.mdb:.2f}%")
         assert rep.passed, f"frame {t}:\n{rep}"
-
-
-def long_run_trend(seeds, frames, batch, size=16, mutation="none", scene=None, method="restir-di", max_depth=2,
-                   settings=None):
-    """Per-batch image means (averaged over seeds) and per-batch maxima over a long run of
-    default ReSTIR DI on the feature scene (temporal and spatial reuse feeding each other), or of
-    another method, scene and settings."""
-    import tempfile
-
-    if scene is None:
-        scene = scene_for("features", __import__("pathlib").Path(tempfile.mkdtemp()))
-    if settings is None:
-        settings = {"candidates": 4, "spatial.neighbors": 8}
-    means, peaks = [], []
-    for s in range(seeds):
-        cfg = restir.RenderConfig(method=method, spp=1, frames=frames, width=size, height=size, seed=7000 + s,
-                                  max_depth=max_depth, keep_frames=True,
-                                  settings={**settings, "debug.mutation": mutation})
-        f = restir.render(scene, cfg).frame_images.astype(np.float64).mean(-1)  # (frames, H, W)
-        b = f[: frames - frames % batch].reshape(-1, batch, size, size)
-        means.append(b.mean(axis=(1, 2, 3)))
-        peaks.append(b.max(axis=(1, 2, 3)))
-    return np.array(means), np.array(peaks)  # (seeds, batches)
-
-
-def check_no_trend(means, peaks):
-    from scipy import stats as sps
-
-    assert np.all(np.isfinite(means)), "the image diverges to inf or NaN over frames (temporal feedback)"
-    per_batch = means.mean(0)
-    se = means.std(0, ddof=1) / np.sqrt(means.shape[0])
-    x = np.arange(len(per_batch), dtype=float)
-    w = 1 / se ** 2
-    xm = np.sum(w * x) / w.sum()
-    slope = np.sum(w * (x - xm) * per_batch) / np.sum(w * (x - xm) ** 2)
-    t = slope * np.sqrt(np.sum(w * (x - xm) ** 2))
-    rho, p = sps.spearmanr(x, peaks.max(0))
-    print(f"batch means {np.round(per_batch, 4)}; slope/SE {t:.2f}; peak Spearman rho {rho:.2f} (p {p:.3f})")
-    assert abs(t) < 3.5, "the image brightens or darkens over frames (temporal feedback)"
-    assert not (rho > 0 and p < 1e-3), "the brightest pixels grow over frames (runaway spots)"
 
 
 def test_no_drift_over_many_frames():

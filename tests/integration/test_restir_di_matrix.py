@@ -20,8 +20,8 @@ import pytest
 
 import restir
 from restir.validation import IndependentRuns
-from tests.integration.test_path_tracer import check
-from tests.integration.test_restir_di import half_dark_scene, shadow_scene
+from tests.helpers import check
+from tests.scenes import half_dark_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
 

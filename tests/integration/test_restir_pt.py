@@ -18,9 +18,10 @@ import pytest
 import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns
-from tests.integration.test_path_tracer import ANALYTIC_REL_TOL, check
+from tests.helpers import SPHERE_CAP as CAP
+from tests.helpers import ANALYTIC_REL_TOL, check
+from tests.helpers import sphere_cap as sphere
 
-CAP = dict(albedo=0.5, radiance=1.0, phi=0.05)
 
 
 def runs(scene, settings, runs, frames, max_depth, method="restir-pt", spp=1, seed0=100, allow_mutation=False, **kw):
@@ -30,10 +31,6 @@ def runs(scene, settings, runs, frames, max_depth, method="restir-pt", spp=1, se
         assert all(s["settings"]["debug.mutation"] == "none" for s in out.stats)  # the unbiased build, asserted
         assert not any(s["reuse_dead"] for s in out.stats), out.stats[0]["shifts"]
     return out
-
-
-def sphere(size=16):
-    return restir.load_scene("builtin:sphere-cap", width=size, height=size, **CAP)
 
 
 def check_sphere(settings, max_depth=4, k=32, frames=16, bound=0.015, allow_mutation=False):

@@ -17,7 +17,7 @@ import pytest
 import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns
-from tests.integration.test_path_tracer import ANALYTIC_REL_TOL, check
+from tests.helpers import ANALYTIC_REL_TOL, check
 
 SPHERE_RUNS, SPHERE_FRAMES = 32, 8
 SPHERE = dict(albedo=0.5, radiance=1.0, phi=0.05)

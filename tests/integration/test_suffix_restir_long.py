@@ -11,8 +11,9 @@
 """
 import pytest
 
-from tests.integration.test_restir_di import check_no_trend, long_run_trend
-from tests.integration.test_restir_pt_long import DEPTH, check_every_frame, check_flat, sphere
+from tests.helpers import SPHERE_DEPTH as DEPTH
+from tests.helpers import check_every_frame, check_flat, check_no_trend, long_run_trend
+from tests.helpers import sphere_cap as sphere
 
 METHOD = "suffix-restir"
 

@@ -12,7 +12,8 @@ tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 
-from tests.integration.test_restir_pt_matrix import SCENES, run_cell
+from tests.helpers import MATRIX_SCENES as SCENES
+from tests.helpers import run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 MATRIX = {

@@ -98,3 +98,19 @@ def test_stage_files_numbered_from_s1_in_order():
         pipeline = open(os.path.join(folder, "pipeline.py")).read()
         for _, f in stages:
             assert f"from .{f[:-3]} import" in pipeline, (method, f)
+
+
+def test_test_files_share_helpers_not_each_other():
+    """Test files share code through the helper modules (tests/helpers.py, tests/scenes.py,
+    tests/shared_scenes.py, tests/unit/shift_harness.py, tests/data/), never by importing another
+    test file."""
+    tests = os.path.join(os.path.dirname(ROOT), "tests")
+    bad = []
+    for d, _, files in os.walk(tests):
+        for f in files:
+            if f.startswith("test_") and f.endswith(".py"):
+                for node in ast.walk(ast.parse(open(os.path.join(d, f)).read())):
+                    names = [node.module or ""] if isinstance(node, ast.ImportFrom) else \
+                        [a.name for a in node.names] if isinstance(node, ast.Import) else []
+                    bad += [(f, n) for n in names if n.startswith("tests.") and n.rpartition(".")[2].startswith("test_")]
+    assert not bad, bad

@@ -5,7 +5,6 @@ on the resampled prefix ends of a real frame, queried at fresh prefix ends. (Tie
 adopted the same previous prefix end share a centre, and which of them the BVH lists first
 depends on its traversal order.)"""
 import numpy as np
-import pytest
 import warp as wp
 
 import restir
@@ -17,7 +16,7 @@ from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
 from restir.integrators.suffix_restir.params import SRParams
 from restir.integrators.suffix_restir.prefix import trace_prefix
-from restir.integrators.suffix_restir.s2_search import SEARCHES, SearchStructure, nearest_prefix_ends
+from restir.integrators.suffix_restir.s2_search import SearchStructure, nearest_prefix_ends
 
 M = 4
 

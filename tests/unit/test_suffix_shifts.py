@@ -10,8 +10,8 @@ import pytest
 import restir
 from restir.api import make_integrator
 from restir.integrators.suffix_restir.domains import suffix_params
-from tests.unit.test_pt_jacobian_fd import describe, relative_errors, run_fd, well_conditioned
-from tests.unit.test_pt_shifts import assert_identity_and_round_trip, run_round_trips
+from tests.unit.shift_harness import (assert_identity_and_round_trip, describe, relative_errors, run_fd, run_round_trips,
+                                     well_conditioned)
 
 
 def suffixes(scene_spec, shift, size, direct="pt", max_depth=6, **settings):

@@ -1,0 +1,179 @@
+"""Helpers shared by the test files (one module, so no test file imports another): the
+statistical check every level uses, the emissive-cap sphere with its exact answer, the long-run
+and invariance harnesses, and the path-reuse methods' stage-isolation matrix cell (ReSTIR PT
+and Suffix ReSTIR run the same scenes). Scene builders live in tests/scenes.py; the shift tests'
+device harnesses in tests/unit/shift_harness.py.
+"""
+import functools
+import os
+
+import numpy as np
+
+import restir
+from restir.scene.builtin import sphere_cap_radiance
+from restir.validation import IndependentRuns, assert_matches
+from tests.shared_scenes import scene_path
+
+
+# ------------------------------------------------------------------ the check
+# Tessellated spheres and ray offsets (~1e-4 of the scene size) make the analytic answers
+# exact only to about 1e-4; the furnace estimators are so nearly deterministic that the tests
+# would detect that. Deviations below this margin count as zero in the analytic tests.
+ANALYTIC_REL_TOL = 5e-4
+
+
+def check(r, reference, reference_var=0.0, tile=8, rel_tol=0.0, other=None, abs_tol=0.0):
+    """Test r against a reference value/image; `other` is the reference's result when it is noisy."""
+    return assert_matches(r, reference, reference_var, other=other, tile=tile, rel_tol=rel_tol, abs_tol=abs_tol)
+
+
+# ------------------------------------------------------------------ the emissive-cap sphere (exact answer)
+SPHERE_CAP = dict(albedo=0.5, radiance=1.0, phi=0.05)
+SPHERE_DEPTH = 4
+SPHERE_EXACT = sphere_cap_radiance(SPHERE_CAP["albedo"], SPHERE_CAP["radiance"], SPHERE_CAP["phi"], SPHERE_DEPTH)
+
+
+def sphere_cap(size=16):
+    return restir.load_scene("builtin:sphere-cap", width=size, height=size, **SPHERE_CAP)
+
+
+# ------------------------------------------------------------------ over frames and parameters (TESTING.md 5.7, 5.8)
+def run_means(settings, runs=32, frames=8, method="restir-pt"):
+    """Per-run image means (non-emitting pixels only: the cap is seen in a few) and the z-test."""
+    cfg = restir.RenderConfig(method=method, spp=1, frames=frames, max_depth=SPHERE_DEPTH, settings=settings)
+    r = IndependentRuns(sphere_cap(), cfg, runs, 300)
+    rep = check(r, SPHERE_EXACT, rel_tol=ANALYTIC_REL_TOL)
+    inside = np.abs(r.image.mean(-1) - SPHERE_EXACT) < 0.5 * SPHERE_EXACT
+    return r.batches[:, inside].astype(np.float64).mean(axis=(1, 2)), rep.mdb
+
+
+def check_flat(values, settings_of, method="restir-pt"):
+    means, ses = [], []
+    for v in values:
+        m, mdb = run_means(settings_of(v), method=method)
+        means.append(m.mean())
+        ses.append(m.std(ddof=1) / np.sqrt(len(m)))
+        print(v, f"mean {means[-1]:.6f} +- {ses[-1]:.6f} (exact {SPHERE_EXACT:.6f}), MDB {mdb:.4f}")
+    x = np.log(np.asarray(values, float))
+    w = 1 / np.asarray(ses) ** 2
+    xm = np.sum(w * x) / w.sum()
+    slope = np.sum(w * (x - xm) * np.asarray(means)) / np.sum(w * (x - xm) ** 2)
+    t = slope * np.sqrt(np.sum(w * (x - xm) ** 2))
+    print(f"slope/SE {t:.2f}")
+    assert abs(t) < 3.5
+
+
+def check_every_frame(method, runs=48, frames_t=(0, 1, 2, 4, 8, 15)):
+    from restir.validation.stats import RGBZTest
+
+    imgs = []
+    for k in range(runs):
+        cfg = restir.RenderConfig(method=method, spp=1, frames=max(frames_t) + 1, seed=2000 + k, max_depth=SPHERE_DEPTH,
+                                  keep_frames=True)
+        imgs.append(restir.render(sphere_cap(), cfg).frame_images)
+    imgs = np.stack(imgs).astype(np.float64)
+    ref = np.full(imgs.shape[2:], SPHERE_EXACT)
+    from scipy import stats as sps
+
+    for t in frames_t:
+        x = imgs[:, t]
+        rep = RGBZTest(x.mean(0), x.var(0, ddof=1) / runs, ref, 0.0, tile=4, alpha=1e-3 / len(frames_t),
+                       df=runs - 1, batches=x, rel_tol=ANALYTIC_REL_TOL,
+                       skew=np.abs(np.nan_to_num(sps.skew(x, axis=0))), kurtosis=np.nan_to_num(sps.kurtosis(x, axis=0)))
+        print("frame", t, f"MDB {100 * rep.mdb:.2f}%")
+        assert rep.passed, f"frame {t}:\n{rep}"
+
+
+def long_run_trend(seeds, frames, batch, size=16, mutation="none", scene=None, method="restir-di", max_depth=2,
+                   settings=None):
+    """Per-batch image means (averaged over seeds) and per-batch maxima over a long run of
+    default ReSTIR DI on the feature scene (temporal and spatial reuse feeding each other), or of
+    another method, scene and settings."""
+    if scene is None:
+        from tests.scenes import feature_scene
+
+        scene = feature_scene()
+    if settings is None:
+        settings = {"candidates": 4, "spatial.neighbors": 8}
+    means, peaks = [], []
+    for s in range(seeds):
+        cfg = restir.RenderConfig(method=method, spp=1, frames=frames, width=size, height=size, seed=7000 + s,
+                                  max_depth=max_depth, keep_frames=True,
+                                  settings={**settings, "debug.mutation": mutation})
+        f = restir.render(scene, cfg).frame_images.astype(np.float64).mean(-1)  # (frames, H, W)
+        b = f[: frames - frames % batch].reshape(-1, batch, size, size)
+        means.append(b.mean(axis=(1, 2, 3)))
+        peaks.append(b.max(axis=(1, 2, 3)))
+    return np.array(means), np.array(peaks)  # (seeds, batches)
+
+
+def check_no_trend(means, peaks):
+    from scipy import stats as sps
+
+    assert np.all(np.isfinite(means)), "the image diverges to inf or NaN over frames (temporal feedback)"
+    per_batch = means.mean(0)
+    se = means.std(0, ddof=1) / np.sqrt(means.shape[0])
+    x = np.arange(len(per_batch), dtype=float)
+    w = 1 / se ** 2
+    xm = np.sum(w * x) / w.sum()
+    slope = np.sum(w * (x - xm) * per_batch) / np.sum(w * (x - xm) ** 2)
+    t = slope * np.sqrt(np.sum(w * (x - xm) ** 2))
+    rho, p = sps.spearmanr(x, peaks.max(0))
+    print(f"batch means {np.round(per_batch, 4)}; slope/SE {t:.2f}; peak Spearman rho {rho:.2f} (p {p:.3f})")
+    assert abs(t) < 3.5, "the image brightens or darkens over frames (temporal feedback)"
+    assert not (rho > 0 and p < 1e-3), "the brightest pixels grow over frames (runaway spots)"
+
+
+# ------------------------------------------------------------------ the path-reuse stage-isolation matrix
+MATRIX_SIZE = 32
+MATRIX_CAMERA_SPEED = {"none": 1.0, "orbit": 3.0, "dolly": 0.02}
+# scene: (loader, max_depth, MDB bound, runs K, frames T)
+MATRIX_SCENES = {
+    "cornell-box-glossy": (lambda: restir.load_scene("builtin:cornell-box-glossy"), 5, 0.05, 64, 8),
+    "veach-bidir": (lambda: restir.load_scene(str(scene_path("veach-bidir"))), 5, 0.06, 128, 32),
+    "veach-mis": (lambda: restir.load_scene(str(scene_path("veach-mis"))), 3, 0.06, 384, 32),
+    "indirect-room": (lambda: restir.load_scene("builtin:indirect-room"), 5, 0.06, 64, 16),
+    "sphere-cap": (lambda: restir.load_scene("builtin:sphere-cap", albedo=0.5, radiance=1.0, phi=0.05), 5, 0.01, 64, 8),
+}
+# The path tracer's spp per frame in the references: 16, and 48 on veach-mis, whose MDB the
+# 16-spp reference set (5.8% on every configuration whatever the method's variance).
+MATRIX_REFERENCE_SPP = {"veach-mis": 48}
+# Configurations whose tails need more runs than their scene's K (measured MDB at the scene's K):
+# direct=pt in the indirect room (7.3% at 64 x 16), the orbiting camera in veach-bidir (ReSTIR
+# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32).
+MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384}
+
+
+def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):
+    load, depth, _, scene_runs, frames = MATRIX_SCENES[name]
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=MATRIX_SIZE, height=MATRIX_SIZE, max_depth=depth,
+                              settings=settings, camera_motion=motion, camera_speed=MATRIX_CAMERA_SPEED[motion])
+    # RESTIR_TEST_WORKERS=n: the runs on n local processes, bitwise the same images (measured on
+    # veach-mis, 48 runs: 0.38 s a run with 2 workers of one thread each, 0.47 s in one process
+    # with 2 threads: at 32x32 a process is held back by its Python launch overhead)
+    workers = int(os.environ.get("RESTIR_TEST_WORKERS", "1"))
+    return IndependentRuns(load(), cfg, runs or scene_runs, seed0, workers=workers)
+
+
+@functools.lru_cache(maxsize=None)
+def matrix_reference(name, motion):
+    return matrix_runs(name, "pt", {}, motion, MATRIX_REFERENCE_SPP.get(name, 16), 9000)
+
+
+def run_cell(name, method, settings, motion, config=""):
+    """One matrix cell: K runs of `method` on scene `name` against its reference (the sphere:
+    the exact value); asserts a sound render (no fault injection, no dead reuse) and the MDB
+    bound, and prints the cell's diagnostics."""
+    _, depth, bound, runs, frames = MATRIX_SCENES[name]
+    runs = MATRIX_RUNS.get((name, config), runs)
+    r = matrix_runs(name, method, settings, motion, 1, 100, runs)
+    assert all(s["settings"]["debug.mutation"] == "none" for s in r.stats)
+    assert not any(s["reuse_dead"] for s in r.stats), r.stats[0]["shifts"]
+    if name == "sphere-cap":
+        rep = check(r, sphere_cap_radiance(0.5, 1.0, 0.05, depth), rel_tol=ANALYTIC_REL_TOL)
+    else:
+        ref = matrix_reference(name, motion)
+        rep = check(r, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    extra = r.stats[0].get("final_samples") or r.stats[0].get("gather_slots")
+    print(name, f"K={runs} T={frames} MDB={rep.mdb:.4f}", r.stats[0]["shifts"], extra)
+    assert rep.mdb < bound
