@@ -1,28 +1,34 @@
 """The Integrator base: everything a method shares besides its stages.
 
 - allocation of named, registered buffers (memory stats per buffer),
-- the stage runner: one timed launch per stage, its per-pixel events summed into counters,
-- the camera of a frame (scripted motion),
+- the frame loop: the camera of the frame (scripted motion), its samples, progress after each,
+  the frame's moments accumulated on the device (film.py) and read once, the events read once,
+- the stage runner: one timed launch per stage, its per-pixel events summed on the device
+  (common/tally.py) into the counters,
 - the stats of a render, read through `stats()` (the API never reads integrator internals).
 
-A method lists its STAGES and KERNELS, implements `allocate` and `render_frame` (a flat table of
-contents of stage calls) and returns each frame's per-pixel mean and variance.
+A method lists its STAGES and KERNELS, implements `allocate` and `render_sample` (one sample of
+every pixel: a flat table of contents of stage calls, returning the sample's radiance as a device
+array). A method whose kernel averages several samples itself (the path tracer) implements
+`render_samples` and `frame_moments` instead.
 """
 import threading
 
 import numpy as np
 import warp as wp
 
+from ..film import SampleFilm, film_add_kernel
 from ..parallel import launch_pixels
 from ..timing import BufferRegistry, StageTimer
 from .common.events import COUNTER_NAMES, EV_RAYS
+from .common.tally import EventTally, tally_kernel
 
 
 COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
 
 
 class Integrator:
-    """Base class. Subclasses list STAGES and implement `render_frame` as a table of contents."""
+    """Base class. Subclasses list STAGES and implement `render_sample` as a table of contents."""
 
     # The method protocol: what `restir info`, the config checks, compare and validate read of a
     # method (class attributes, so no render is needed to read them).
@@ -55,14 +61,16 @@ class Integrator:
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
         self.on_samples = None  # progress hook within a frame: on_samples(samples_done, spp), if set
-        self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into counters
+        self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into the tally
+        self.tally = EventTally(self.device)  # the events' sums on the device, read once per frame
+        self._film = None
         self.allocate()
         timer = threading.Timer(COMPILE_NOTICE_S, on_compile) if on_compile is not None else None
         if timer is not None:
             timer.daemon = True
             timer.start()
         try:
-            for k in self.kernels():
+            for k in (*self.kernels(), tally_kernel, film_add_kernel):
                 wp.load_module(k.module, device=self.device)
         finally:
             if timer is not None:
@@ -95,14 +103,63 @@ class Integrator:
         non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
         stages that write radiance). new_call=False: a further part of the same run of the stage
         (its time adds to that run's)."""
-        with self.timer.stage(self.stage_prefix + stage, new_call):
+        key = self.stage_prefix + stage
+        with self.timer.stage(key, new_call):
             launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
                           self.reverse_launch)
-        ev = self.events.numpy().sum(axis=0, dtype=np.int64)
-        for i, name in enumerate((nonfinite,) + COUNTER_NAMES[1:]):
-            self.counters[name] = self.counters.get(name, 0) + int(ev[i])
-        key = self.stage_prefix + stage
-        self.stage_rays[key] = self.stage_rays.get(key, 0) + int(ev[EV_RAYS])
+        self.tally.add(("stage", key, nonfinite), self.events)
+
+    def collect_events(self) -> None:
+        """Read the tally (once per frame: the one wait for the device's sums) into the counters,
+        the rays per stage, and the method's own sums (`take_tally`)."""
+        for key, ev in self.tally.read().items():
+            if key[0] != "stage":
+                self.take_tally(key, ev)
+                continue
+            _, stage, nonfinite = key
+            for i, name in enumerate((nonfinite,) + COUNTER_NAMES[1:]):
+                self.counters[name] = self.counters.get(name, 0) + int(ev[i])
+            self.stage_rays[stage] = self.stage_rays.get(stage, 0) + int(ev[EV_RAYS])
+
+    def take_tally(self, key, sums: np.ndarray) -> None:
+        """A method's own event sums (tally keys other than a stage's), once per frame."""
+        raise KeyError(f"no owner for the event tally {key}")
+
+    # ------------------------------------------------------------------ the frame loop
+    @property
+    def film(self) -> SampleFilm:
+        if self._film is None:  # made on the first frame: a method that never renders one needs none
+            self._film = SampleFilm(self, int(self.settings["spp"]))
+        return self._film
+
+    def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
+        """One frame: (mean, variance) per pixel over its samples, each (H, W, 3)."""
+        camera = self.camera(frame)
+        spp = int(self.settings["spp"])
+        for begin, end in self.sample_batches(spp):
+            self.render_samples(frame, begin, end, camera)
+            if self.on_samples is not None:
+                self.on_samples(end, spp)
+        self.collect_events()
+        return self.frame_moments()
+
+    def sample_batches(self, spp: int) -> list:
+        """The frame's samples as [begin, end) ranges, progress reported after each: one by one."""
+        return [(s, s + 1) for s in range(spp)]
+
+    def render_samples(self, frame: int, begin: int, end: int, camera) -> None:
+        if begin == 0:
+            self.film.begin()
+        for s in range(begin, end):
+            self.film.add(self.render_sample(frame, s, camera))
+
+    def render_sample(self, frame: int, sample: int, camera):
+        """One sample of every pixel; its radiance, a device array (one vec3 per pixel) that stays
+        unchanged until the next sample."""
+        raise NotImplementedError
+
+    def frame_moments(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.film.read((self.height, self.width, 3))
 
     @property
     def rays(self) -> int:
@@ -122,6 +179,7 @@ class Integrator:
 
     def stats(self) -> dict:
         """What the method reports about the frames rendered so far (the API adds wall times)."""
+        self.collect_events()  # stages run outside a frame (tests, a component) count too
         stage_ms = sum(self.timer.ms.values())
         return {
             "device": str(self.device),
@@ -140,8 +198,4 @@ class Integrator:
         }
 
     def allocate(self) -> None:
-        raise NotImplementedError
-
-    def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
-        """Returns (mean, variance) per pixel over this frame's samples, each (H, W, 3)."""
         raise NotImplementedError

@@ -222,20 +222,22 @@ class PathTracer(Integrator):
         p.nee_samples = int(s["nee.samples"])
         return p
 
-    def render_frame(self, frame: int):
+    # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch
+    # per frame, or with a progress hook a few launches over consecutive samples (the same numbers
+    # in the same order, so the same image) so that long frames show progress.
+    def sample_batches(self, spp: int) -> list:
+        parts = min(spp, 8) if self.on_samples is not None else 1
+        bounds = [spp * i // parts for i in range(parts + 1)]
+        return list(zip(bounds[:-1], bounds[1:]))
+
+    def render_samples(self, frame: int, begin: int, end: int, camera) -> None:
         kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
         p = self.params(frame)
-        camera = self.camera(frame)
-        # One launch per frame; with a progress hook, a few launches over consecutive samples (the
-        # same numbers in the same order, so the same image) so that long frames show progress.
-        parts = min(p.spp, 8) if self.on_samples is not None else 1
-        bounds = [p.spp * i // parts for i in range(parts + 1)]
-        for i in range(parts):
-            p.sample_begin, p.sample_end = bounds[i], bounds[i + 1]
-            self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p],
-                           [self.frame_mean, self.frame_m2], nonfinite="nonfinite_outputs", new_call=i == 0)
-            if self.on_samples is not None:
-                self.on_samples(p.sample_end, p.spp)
+        p.sample_begin, p.sample_end = begin, end
+        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p], [self.frame_mean, self.frame_m2],
+                       nonfinite="nonfinite_outputs", new_call=begin == 0)
+
+    def frame_moments(self):
         shape = (self.height, self.width, 3)
-        var = self.frame_m2.numpy() / np.float32(p.spp)
+        var = self.frame_m2.numpy() / np.float32(self.settings["spp"])
         return self.frame_mean.numpy().reshape(shape), var.reshape(shape)

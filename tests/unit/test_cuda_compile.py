@@ -20,6 +20,8 @@ KERNEL_MODULES = [
     "restir_pt",
     "suffix_restir",
     "restir.aov",
+    "restir.film",
+    "restir.integrators.common.tally",
 ]
 
 

@@ -34,7 +34,8 @@ def check_di_settings(settings: dict) -> None:
 
 def attach_direct_light(integ) -> ReSTIRDI | None:
     """The ReSTIR DI component of `integ` (which has allocated `gbuffers`, `primary_weight` and
-    `emission`), sharing its timer, counters and events; None with direct=pt or max_depth < 2."""
+    `emission`), sharing its timer, counters, events and their tally; None with direct=pt or
+    max_depth < 2."""
     s = integ.settings
     if s["direct"] != "restir-di" or s["max_depth"] < 2:
         return None
@@ -44,6 +45,7 @@ def attach_direct_light(integ) -> ReSTIRDI | None:
     di.timer = integ.timer
     di.counters = integ.counters
     di.events = integ.events
+    di.tally = integ.tally  # its events are read with the method's, once per frame
     di.stage_rays = integ.stage_rays  # its rays count in the method's (stats "rays", "rays_by_stage")
     del di.buffers.bytes["events"]
     integ.buffers.bytes.update({f"di.{k}": v for k, v in di.buffers.bytes.items()})

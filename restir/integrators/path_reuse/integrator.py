@@ -5,7 +5,6 @@ import numpy as np
 import warp as wp
 
 from ...device.streams import MAX_SPATIAL_ROUNDS, PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
-from ...film import PixelMoments
 from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
 from ..common.gbuffer import PingPong, allocate_gbuffer
@@ -116,44 +115,45 @@ class PathReuseIntegrator(Integrator):
         return p
 
     def count_shifts(self, stage: str) -> None:
-        acc = self.shift_counts.setdefault(stage, np.zeros(4, np.int64))
-        acc += self.shift_events.numpy().sum(axis=0, dtype=np.int64)
+        """The pass's shift counts (in `shift_events`) summed on the device, read once per frame."""
+        self.tally.add(("shifts", stage), self.shift_events)
+
+    def take_tally(self, key, sums: np.ndarray) -> None:
+        if key[0] == "shifts":
+            acc = self.shift_counts.setdefault(key[1], np.zeros(4, np.int64))
+            acc += sums
+        else:
+            super().take_tally(key, sums)
 
     def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
         """The base class's ping-pong pass, with the pass's shift counts summed for the stats."""
         super().reuse_pass(stage, kernel, inputs, (self.shift_events,), in_place)
         self.count_shifts(stage)
 
-    def render_frame(self, frame: int):
-        """Per sample: the primary hits and the direct light (ReSTIR DI, or the emission seen
-        directly), the method's resampling passes and output (`resample_sample`), then this
-        sample's final reservoirs and primary hits become the next one's history."""
-        camera = self.camera(frame)
-        moments = PixelMoments((self.num_pixels, 3))
-        for s in range(self.settings["spp"]):
-            self.run_stage("gbuffer", primary_hits_kernel,
-                           [self.dscene.scene, camera, wp.uint32(self.settings["seed"] & 0xFFFFFFFF), wp.uint32(frame), s,
-                            int(bool(self.settings["hide_emitters"]))],
-                           [self.gbuffers.current, self.primary_weight, self.emission])
-            direct = self.emission
-            if self.di is not None:
-                self.di.resample_and_shade(frame, s)
-                direct = self.di.sample_L
-            L = self.resample_sample(frame, s, direct) if self.resamples else direct.numpy()
-            self.reservoirs.swap()
-            self.swap_history()
-            if self.di is not None:
-                self.di.end_sample(camera)
-            self.gbuffers.swap()
-            self.prev_camera = camera
-            moments.add(L)
-            if self.on_samples is not None:
-                self.on_samples(s + 1, self.settings["spp"])
-        shape = (self.height, self.width, 3)
-        return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
+    def render_sample(self, frame: int, sample: int, camera):
+        """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the
+        method's resampling passes and output (`resample_sample`), then this sample's final
+        reservoirs and primary hits become the next one's history."""
+        self.run_stage("gbuffer", primary_hits_kernel,
+                       [self.dscene.scene, camera, wp.uint32(self.settings["seed"] & 0xFFFFFFFF), wp.uint32(frame),
+                        sample, int(bool(self.settings["hide_emitters"]))],
+                       [self.gbuffers.current, self.primary_weight, self.emission])
+        direct = self.emission
+        if self.di is not None:
+            self.di.resample_and_shade(frame, sample)
+            direct = self.di.sample_L
+        L = self.resample_sample(frame, sample, direct) if self.resamples else direct
+        self.reservoirs.swap()
+        self.swap_history()
+        if self.di is not None:
+            self.di.end_sample(camera)
+        self.gbuffers.swap()
+        self.prev_camera = camera
+        return L
 
-    def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
-        """The method's passes for one sample after the primary hits; the sample's image (N, 3)."""
+    def resample_sample(self, frame: int, sample: int, direct):
+        """The method's passes for one sample after the primary hits; the sample's radiance (a
+        device array, one vec3 per pixel)."""
         raise NotImplementedError
 
     def swap_history(self) -> None:

@@ -1,13 +1,11 @@
 """ReSTIR DI as a pipeline of stages: primary hits, initial RIS, visibility, temporal reuse,
 spatial reuse rounds, shading.
 
-render_frame is the table of contents; each stage is one kernel in its own file.
+render_sample is the table of contents; each stage is one kernel in its own file.
 """
-import numpy as np
 import warp as wp
 
 from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS, MAX_SPATIAL_ROUNDS
-from ...film import PixelMoments
 from ..base import Integrator
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.primary_hits import primary_hits_kernel
@@ -171,16 +169,9 @@ class ReSTIRDI(Integrator):
         self.reservoirs.swap()
         self.prev_camera = camera
 
-    def render_frame(self, frame: int):
-        camera = self.camera(frame)
-        moments = PixelMoments((self.num_pixels, 3))
-        for s in range(self.settings["spp"]):
-            self.trace_primary(frame, s, camera)
-            self.resample_and_shade(frame, s)
-            self.end_sample(camera)
-            self.gbuffers.swap()
-            moments.add(self.sample_L.numpy())
-            if self.on_samples is not None:
-                self.on_samples(s + 1, self.settings["spp"])
-        shape = (self.height, self.width, 3)
-        return moments.mean.reshape(shape).astype(np.float32), moments.variance.reshape(shape)
+    def render_sample(self, frame: int, sample: int, camera):
+        self.trace_primary(frame, sample, camera)
+        self.resample_and_shade(frame, sample)
+        self.end_sample(camera)
+        self.gbuffers.swap()
+        return self.sample_L

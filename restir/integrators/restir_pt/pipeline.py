@@ -1,7 +1,7 @@
 """ReSTIR PT as a pipeline of stages: primary hits, ReSTIR DI (direct light at the primary hit,
 unless direct=pt), trace and initial RIS, temporal reuse, spatial reuse rounds, shading.
 
-render_frame is the table of contents; each stage is one kernel in its own file.
+render_sample is the table of contents; each stage is one kernel in its own file.
 """
 import numpy as np
 
@@ -89,7 +89,7 @@ class ReSTIRPT(PathReuseIntegrator):
         s = self.settings
         return self.pt_params(frame, sample, s["rc.near_distance"], s["temporal.cap"])
 
-    def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
+    def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
         mutation = self.settings["debug.mutation"]
         initial, temporal, spatial = stage_kernels(mutation)
@@ -104,8 +104,14 @@ class ReSTIRPT(PathReuseIntegrator):
                             mutation == "spatial_in_place")
         self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight],
                        [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
-        self.origins += self.shift_events.numpy().sum(axis=0, dtype=np.int64)[:3]
-        return self.sample_L.numpy()
+        self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins
+        return self.sample_L
+
+    def take_tally(self, key, sums: np.ndarray) -> None:
+        if key[0] == "origins":
+            self.origins += sums[:3]
+        else:
+            super().take_tally(key, sums)
 
     def stats(self) -> dict:
         """The path-reuse stats, and the fractions of the final samples (those with W > 0) taken

@@ -2,7 +2,7 @@
 ReSTIR DI (direct light at the primary hit, unless direct=pt), prefix trace and temporal prefix
 reuse, the prefix search structure, suffix trace, suffix temporal and spatial reuse, final gather.
 
-render_frame is the table of contents; each stage is one kernel in its own file.
+render_sample is the table of contents; each stage is one kernel in its own file.
 """
 import math
 
@@ -247,7 +247,7 @@ class SuffixReSTIR(PathReuseIntegrator):
         self.run_stage("search", grid_order_kernel, [sc, ends, g, self.num_pixels], [g.entries, g.ranges],
                        new_call=False)
 
-    def resample_sample(self, frame: int, sample: int, direct) -> np.ndarray:
+    def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
         suffix, gather = stage_kernels(self.settings["debug.mutation"])
         gb, res = self.gbuffers, self.reservoirs
@@ -279,9 +279,15 @@ class SuffixReSTIR(PathReuseIntegrator):
                        [sc, p, gb.current, self.search, self.prefixes.current, self.prefix_gbs.current, res.current,
                         self.width, self.height, direct, self.primary_weight],
                        [self.sample_L, self.gather_slots, self.shift_events], nonfinite="nonfinite_outputs")
-        self.slot_counts += self.gather_slots.numpy().sum(axis=0, dtype=np.int64)[:3]
+        self.tally.add(("slots",), self.gather_slots)
         self.count_shifts("gather")
-        return self.sample_L.numpy()
+        return self.sample_L
+
+    def take_tally(self, key, sums: np.ndarray) -> None:
+        if key[0] == "slots":
+            self.slot_counts += sums[:3]
+        else:
+            super().take_tally(key, sums)
 
     def swap_history(self) -> None:
         """This sample's resampled prefixes and their ends become the next one's history."""
