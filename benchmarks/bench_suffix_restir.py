@@ -152,14 +152,14 @@ def query_ms(scene, size, max_depth, settings=None):
     found = wp.zeros(n, dtype=int, device=integ.device)
     launch_pixels(ends_kernel, n, [integ.dscene.scene, integ.params(1, 0), integ.gbuffers.previous], [points],
                   integ.device, integ.slices)
-    args = [integ.search, int(integ.settings["gather.suffixes"])]
+    args = [integ.search, int(integ.settings.gather_suffixes)]
     launch_pixels(queries_kernel, n, args, [points, found], integ.device, integ.slices)
     wp.synchronize()
     t = time.perf_counter()
     for _ in range(3):
         launch_pixels(queries_kernel, n, args, [points, found], integ.device, integ.slices)
     wp.synchronize()
-    ms = (time.perf_counter() - t) / 3 * 1e3 * integ.settings["gather.prefixes"]
+    ms = (time.perf_counter() - t) / 3 * 1e3 * integ.settings.gather_prefixes
     visited = wp.zeros(n, dtype=int, device=integ.device)
     inside = wp.zeros(n, dtype=int, device=integ.device)
     launch_pixels(count_kernel, n, [integ.search, points], [visited, inside], integ.device, integ.slices)

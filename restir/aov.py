@@ -57,7 +57,7 @@ def compute_aovs(integrator, names, frames: int) -> dict:
     n = integrator.num_pixels
     out = {k: wp.zeros(n, dtype=wp.vec3, device=integrator.device) for k in AOVS}
     samples = max(1, min(AOV_SAMPLES, frames))  # frames: the camera samples to average (one per frame)
-    launch_pixels(aov_kernel, n, [integrator.dscene.scene, integrator.camera(0), wp.uint32(integrator.settings["seed"]),
+    launch_pixels(aov_kernel, n, [integrator.dscene.scene, integrator.camera(0), wp.uint32(integrator.settings.seed),
                                   samples], [out["albedo"], out["normal"]], integrator.device, integrator.slices)
     h, w = integrator.height, integrator.width
     return {k: out[k].numpy().reshape(h, w, 3).astype(np.float32) for k in names}

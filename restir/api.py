@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import ConfigError, RenderConfig, method_settings
+from .config import ConfigError, RenderConfig
 from .film import PixelMoments
 from .scene.builtin import BUILTINS, builtin_scene
 from .scene.errors import SceneError
@@ -231,7 +231,7 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
     if config.method not in METHODS:
         raise ConfigError(f"unknown method '{config.method}' (available: {', '.join(METHODS)})")
     cls = METHODS[config.method]
-    settings = method_settings(cls.SETTINGS, config.settings)
+    settings = cls.Settings.from_overrides(config.settings)
     fixed = cls.FIXED_MAX_DEPTH
     if fixed is not None and config.max_depth not in (None, fixed):
         raise ConfigError(f"method '{config.method}' computes max_depth {fixed} (direct illumination) only")
@@ -240,11 +240,10 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
     if fixed is not None and config.max_depth is None and scene.max_depth != fixed:
         notes.append(f"method '{config.method}' renders max_depth {fixed} (the only depth it computes), "
                      f"not the scene's max_depth {scene.max_depth}")
-    settings.update(seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
-                    camera_motion=config.camera_motion, camera_speed=config.camera_speed,
-                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
-    if hasattr(cls, "check_settings"):
-        cls.check_settings(settings)
+    settings = dataclasses.replace(settings, seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
+                                   camera_motion=config.camera_motion, camera_speed=config.camera_speed,
+                                   rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
+    cls.check_settings(settings)
     try:
         dscene = DeviceScene(scene, config.device, config.tracer)
     except RuntimeError as e:
@@ -309,7 +308,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_c
         moments = PixelMoments((h, w, 3))
         frame_sums = np.zeros((4, h, w, 3))
         frames = [] if config.keep_frames else None
-        spp = integ.settings["spp"]
+        spp = integ.settings.spp
         t0 = time.perf_counter()
         done = 0
         if progress:

@@ -1,7 +1,7 @@
 """Render configuration: the common settings and each method's documented, typed settings.
 
-Method settings (`--set key=value`) are validated against the method's SETTINGS table; an
-unknown key is an error, never silently ignored.
+Method settings (`--set key=value`) are validated against the method's settings dataclass
+(restir/settings.py); an unknown key is an error, never silently ignored.
 """
 from dataclasses import dataclass, field
 
@@ -38,7 +38,7 @@ class RenderConfig:
     max_depth: int | None = None    # Mitsuba's meaning; None: the scene's integrator max_depth
     seed: int = 0
     device: str = "cpu"
-    settings: dict = field(default_factory=dict)   # method settings (see each method's SETTINGS)
+    settings: dict = field(default_factory=dict)   # method settings {key: value} (`restir info` lists them)
     slices: int | None = None       # CPU launch slices (None: one per core)
     debug_reverse_launch: bool = False  # run CPU slices sequentially, last first (race test R2)
     tracer: str = "auto"            # "auto" (Embree on the CPU if available), "embree", "warp"
@@ -85,12 +85,3 @@ def parse_value(text: str, like):
         name = type(like).__name__
         raise ConfigError(f"'{text}' is not {'an' if name[0] in 'aeiou' else 'a'} {name}") from None
     return text
-
-
-def method_settings(defaults: dict, overrides: dict) -> dict:
-    out = dict(defaults)
-    for k, v in overrides.items():
-        if k not in defaults:
-            raise ConfigError(f"unknown setting '{k}' (known: {', '.join(sorted(defaults)) or 'none'})")
-        out[k] = parse_value(v, defaults[k]) if isinstance(v, str) else v
-    return out

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from ..config import ConfigError, RenderConfig, method_settings
+from ..config import ConfigError, RenderConfig
 from . import metrics
 from . import structure
 from .config import CompareConfig
@@ -62,7 +62,7 @@ class MethodSpec:
             else:
                 settings[key.strip()] = value.strip()
         try:
-            method_settings(METHODS[name].SETTINGS, settings)  # unknown keys and bad values, before any work
+            METHODS[name].Settings.from_overrides(settings)  # unknown keys and bad values, before any work
         except ConfigError as e:
             raise ConfigError(f"--method {text}: {e}") from None
         return cls(text, name, settings, spp)

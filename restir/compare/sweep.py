@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 
-from ..config import ConfigError, RenderConfig, method_settings
+from ..config import ConfigError, RenderConfig
 from .frames import FrameStats
 from .runner import Comparison, measure
 from .reference import load_reference_file, path_traced_reference
@@ -41,7 +41,7 @@ def parse_grid(items, method: str) -> list:
                     raise ConfigError(f"--grid {item}: spp '{v}' is not an integer >= 1")
             else:
                 try:
-                    method_settings(METHODS[method].SETTINGS, {key: v})
+                    METHODS[method].Settings.from_overrides({key: v})
                 except ConfigError as e:
                     raise ConfigError(f"--grid {item}: {e}") from None
         axes.append((key, vals))

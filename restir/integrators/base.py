@@ -19,6 +19,7 @@ import warp as wp
 
 from ..film import SampleFilm, film_add_kernel
 from ..parallel import launch_pixels
+from ..settings import Settings
 from ..timing import BufferRegistry, StageTimer
 from .common.events import COUNTER_NAMES, EV_RAYS
 from .common.tally import EventTally, tally_kernel
@@ -34,15 +35,24 @@ class Integrator:
     # method (class attributes, so no render is needed to read them).
     name = "base"
     DESCRIPTION = ""        # one line for `restir info`
-    SETTINGS: dict = {}     # --set KEY=VALUE defaults
-    SETTINGS_DOC: dict = {}  # one line per setting (a test requires one for each)
+    Settings = Settings     # the method's settings dataclass (restir/settings.py)
+    SETTINGS: dict = {}     # --set KEY=VALUE defaults, from Settings (made for each subclass)
+    SETTINGS_DOC: dict = {}  # one line per setting, from Settings
     FIXED_MAX_DEPTH: int | None = None  # the only max_depth the method computes, or None: any
     MUTATIONS: tuple = ("none",)  # fault injections of debug.mutation (TESTING.md 5.11)
     stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
 
-    def __init__(self, dscene, settings: dict, device: str, slices: int | None = None, on_compile=None):
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        cls.SETTINGS, cls.SETTINGS_DOC = cls.Settings.defaults(), cls.Settings.docs()
+
+    @classmethod
+    def check_settings(cls, settings) -> None:
+        """Refuse settings the method cannot render (a ConfigError), before anything is built."""
+
+    def __init__(self, dscene, settings: Settings, device: str, slices: int | None = None, on_compile=None):
         """on_compile: called with no argument when loading the kernels takes long (they are
         being compiled: the first run of a configuration; later runs load them from Warp's cache)."""
         self.dscene = dscene
@@ -84,11 +94,11 @@ class Integrator:
         """The device camera of `frame` (scripted motion from the settings, if any)."""
         from ..camera_motion import camera_pose
 
-        motion = self.settings.get("camera_motion", "none")
+        motion = self.settings.camera_motion
         if motion == "none":
             return self.dscene.camera
         host = self.dscene.host
-        pose = camera_pose(host.camera.to_world, host.bounds(), motion, self.settings["camera_speed"], frame)
+        pose = camera_pose(host.camera.to_world, host.bounds(), motion, self.settings.camera_speed, frame)
         return self.dscene.camera_at(pose)
 
     def buffer(self, name: str, dtype, shape=None):
@@ -129,13 +139,13 @@ class Integrator:
     @property
     def film(self) -> SampleFilm:
         if self._film is None:  # made on the first frame: a method that never renders one needs none
-            self._film = SampleFilm(self, int(self.settings["spp"]))
+            self._film = SampleFilm(self, int(self.settings.spp))
         return self._film
 
     def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
         """One frame: (mean, variance) per pixel over its samples, each (H, W, 3)."""
         camera = self.camera(frame)
-        spp = int(self.settings["spp"])
+        spp = int(self.settings.spp)
         for begin, end in self.sample_batches(spp):
             self.render_samples(frame, begin, end, camera)
             if self.on_samples is not None:
@@ -183,8 +193,8 @@ class Integrator:
         stage_ms = sum(self.timer.ms.values())
         return {
             "device": str(self.device),
-            "max_depth": self.settings["max_depth"],
-            "settings": dict(self.settings),
+            "max_depth": self.settings.max_depth,
+            "settings": self.settings.as_dict(),
             "stages": self.timer.summary(),
             "stage_total_ms": stage_ms,
             "rays": self.rays,

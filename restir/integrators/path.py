@@ -15,22 +15,25 @@ STAGE_PATH_NEE + j, so images with one light sample do not change.
 The path's steps (light connection, emission MIS weight, scattering, Russian roulette) are the
 device functions of device/path_steps.py, which ReSTIR PT's base path and replay also call.
 """
+import dataclasses
+
 import numpy as np
 import warp as wp
 
+from ..device.bounce import bounce_dim, nee_at, scatter_at
 from ..device.bsdf import bsdf_is_delta_only
 from ..device.camera import Camera, camera_ray
 from ..device.color import max3
 from ..device.intersect import T_MAX, trace_closest
 from ..device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
-from ..device.path_steps import connect_to_light, emission_mis_weight, rr_survival_probability, scatter
-from ..device.rng import rng_key, rng_uniform, rng_uniform2
+from ..device.path_steps import emission_mis_weight, rr_survival_probability
+from ..device.rng import rng_key, rng_uniform
 from ..device.sampling import frame_from_normal, to_local
 from ..device.scene_device import SceneDevice, material_at
-from ..device.streams import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIM_RR, DIMS_PER_BOUNCE,
-                              DIMS_PER_SAMPLE, MAX_NEE_SAMPLES, MAX_SEGMENTS, STAGE_PATH_NEE, STAGE_PATH_TRACE)
+from ..device.streams import DIM_RR, DIMS_PER_SAMPLE, MAX_NEE_SAMPLES, MAX_SEGMENTS, STAGE_PATH_NEE, STAGE_PATH_TRACE
 from ..device.types import ENV_NONE, STRATEGY_BSDF, STRATEGY_MIS, STRATEGY_NEE
 from ..film import Welford, welford_add
+from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import output_events, ray_events
 
@@ -100,27 +103,22 @@ def make_path_trace_kernel(several_light_samples: bool):
             mat = material_at(scene, hit.tri, hit.uv)
             frame = frame_from_normal(hit.ns)
             wi = to_local(frame, -d)
-            dim = base + wp.uint32((depth + 1) * DIMS_PER_BOUNCE)
+            dim = base + bounce_dim(depth, 0)  # this vertex's numbers (device/bounce.py; RR below)
             # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B)
             if params.strategy != STRATEGY_BSDF and bsdf_is_delta_only(mat) == 0:
-                c = connect_to_light(scene, hit, mat, frame, wi, rng_uniform(key, dim + wp.uint32(DIM_LIGHT_SELECT)),
-                                     rng_uniform2(key, dim + wp.uint32(DIM_LIGHT_POINT)), params.nee_samples,
-                                     params.strategy)
+                c = nee_at(scene, hit, mat, frame, wi, key, base, depth, params.nee_samples, params.strategy)
                 nee = c.L
                 rays += c.rays
                 if wp.static(several_light_samples):
                     for j in range(1, params.nee_samples):
                         key_j = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_NEE + j), pixel)
-                        cj = connect_to_light(scene, hit, mat, frame, wi,
-                                              rng_uniform(key_j, dim + wp.uint32(DIM_LIGHT_SELECT)),
-                                              rng_uniform2(key_j, dim + wp.uint32(DIM_LIGHT_POINT)),
-                                              params.nee_samples, params.strategy)
+                        cj = nee_at(scene, hit, mat, frame, wi, key_j, base, depth, params.nee_samples,
+                                    params.strategy)
                         nee += cj.L
                         rays += cj.rays
                 L += wp.cw_mul(beta, nee)
             # ---- BSDF sampling
-            sc = scatter(hit, mat, frame, wi, rng_uniform(key, dim + wp.uint32(DIM_BSDF_LOBE)),
-                         rng_uniform2(key, dim + wp.uint32(DIM_BSDF_DIR)))
+            sc = scatter_at(hit, mat, frame, wi, key, base, depth)
             if sc.valid == 0:
                 break
             beta = wp.cw_mul(beta, sc.bs.weight)
@@ -181,25 +179,29 @@ path_trace_kernel = make_path_trace_kernel(False)
 path_trace_kernel_light_samples = make_path_trace_kernel(True)  # nee.samples > 1
 
 
+@dataclasses.dataclass
+class PathTracerSettings(Settings):
+    strategy: str = setting("strategy", "mis", "mis: NEE and BSDF sampling with the balance heuristic; nee: NEE "
+                            "only; bsdf: BSDF sampling only")
+    rr: bool = setting("rr", False, "Russian roulette from the scene's rr_depth (Mitsuba's rule)")
+    nee_samples: int = setting("nee.samples", 1, "light samples per vertex (Mitsuba's direct integrator's "
+                               "emitter samples)", static=True)  # 1 or more: two kernels
+
+
 class PathTracer(Integrator):
     name = "pt"
     STAGES = ("path_trace",)
     KERNELS = (path_trace_kernel, path_trace_kernel_light_samples)
-    SETTINGS = {"strategy": "mis", "rr": False, "nee.samples": 1}
-    SETTINGS_DOC = {
-        "strategy": "mis: NEE and BSDF sampling with the balance heuristic; nee: NEE only; bsdf: BSDF sampling only",
-        "rr": "Russian roulette from the scene's rr_depth (Mitsuba's rule)",
-        "nee.samples": "light samples per vertex (Mitsuba's direct integrator's emitter samples)",
-    }
+    Settings = PathTracerSettings
     DESCRIPTION = "reference path tracer (NEE + BSDF sampling with MIS), Mitsuba's max_depth"
 
     @staticmethod
-    def check_settings(settings: dict) -> None:
+    def check_settings(settings: PathTracerSettings) -> None:
         from ..config import ConfigError
 
-        if settings["strategy"] not in STRATEGIES:
+        if settings.strategy not in STRATEGIES:
             raise ConfigError(f"strategy must be one of {', '.join(STRATEGIES)}")
-        if not 1 <= settings["nee.samples"] <= MAX_NEE_SAMPLES:
+        if not 1 <= settings.nee_samples <= MAX_NEE_SAMPLES:
             raise ConfigError(f"nee.samples must be in [1, {MAX_NEE_SAMPLES}]")
 
     def allocate(self) -> None:
@@ -209,17 +211,17 @@ class PathTracer(Integrator):
     def params(self, frame: int) -> PTParams:
         s = self.settings
         p = PTParams()
-        p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
+        p.seed = wp.uint32(s.seed & 0xFFFFFFFF)
         p.frame = wp.uint32(frame)
-        p.spp = int(s["spp"])
+        p.spp = int(s.spp)
         p.sample_begin = 0
         p.sample_end = p.spp
-        p.max_depth = int(s["max_depth"])
-        p.rr_depth = int(s["rr_depth"])
-        p.use_rr = int(bool(s["rr"]))
-        p.strategy = int(STRATEGIES[s["strategy"]])
-        p.hide_emitters = int(bool(s["hide_emitters"]))
-        p.nee_samples = int(s["nee.samples"])
+        p.max_depth = int(s.max_depth)
+        p.rr_depth = int(s.rr_depth)
+        p.use_rr = int(bool(s.rr))
+        p.strategy = int(STRATEGIES[s.strategy])
+        p.hide_emitters = int(bool(s.hide_emitters))
+        p.nee_samples = int(s.nee_samples)
         return p
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch
@@ -231,7 +233,7 @@ class PathTracer(Integrator):
         return list(zip(bounds[:-1], bounds[1:]))
 
     def render_samples(self, frame: int, begin: int, end: int, camera) -> None:
-        kernel = path_trace_kernel if self.settings["nee.samples"] == 1 else path_trace_kernel_light_samples
+        kernel = path_trace_kernel if self.settings.nee_samples == 1 else path_trace_kernel_light_samples
         p = self.params(frame)
         p.sample_begin, p.sample_end = begin, end
         self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p], [self.frame_mean, self.frame_m2],
@@ -239,5 +241,5 @@ class PathTracer(Integrator):
 
     def frame_moments(self):
         shape = (self.height, self.width, 3)
-        var = self.frame_m2.numpy() / np.float32(self.settings["spp"])
+        var = self.frame_m2.numpy() / np.float32(self.settings.spp)
         return self.frame_mean.numpy().reshape(shape), var.reshape(shape)

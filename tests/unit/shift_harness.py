@@ -24,13 +24,12 @@ from restir.device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE
 from restir.device.types import LOBE_DIFFUSE_REFLECTION, MAT_PLASTIC, MAT_ROUGHPLASTIC
 from restir.integrators.common.gbuffer import GBuffer
 from restir.integrators.common.shading import load_shading
-from restir.integrators.path_reuse.base_path import bounce_dim
+from restir.device.bounce import bounce_dim, segment
 from restir.integrators.path_reuse.domain import domain_at
 from restir.integrators.path_reuse.params import PathReuseParams
 from restir.integrators.path_reuse.path_sample import (NO_RC, RC_ENV, RC_SURFACE, PathReservoir, ends_with_nee,
                                                       holds_path, lobe_at_rc, lobe_at_rc_prev, path_length, rc_kind,
                                                       rc_length)
-from restir.integrators.path_reuse.rc_criteria import segment
 from restir.integrators.path_reuse.shift import Replay, _replay_prefixes, make_shift, shift_path
 
 

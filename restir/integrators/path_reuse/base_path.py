@@ -16,23 +16,21 @@ the part up to and including rcPrev's bounce (beta) and the part after z's own b
 """
 import warp as wp
 
+from ...device.bounce import found_along, nee_at, scatter_at
 from ...device.bsdf import bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
-from ...device.intersect import T_MAX, SurfaceHit, trace_closest
-from ...device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
-from ...device.path_steps import connect_to_light, emission_mis_weight, scatter
-from ...device.rng import rng_uniform, rng_uniform2
+from ...device.intersect import T_MAX, trace_closest
+from ...device.path_steps import emission_mis_weight
+from ...device.rng import rng_uniform
 from ...device.scene_device import SceneDevice, material_at
 from ...device.sampling import frame_from_normal, to_local
-from ...device.streams import (DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIMS_PER_BOUNCE,
-                               PT_RIS_DIM_EMISSION, PT_RIS_DIM_NEE, PT_RIS_DIMS_PER_VERTEX)
-from ...device.types import ENV_NONE, STRATEGY_MIS
+from ...device.streams import PT_RIS_DIM_EMISSION, PT_RIS_DIM_NEE, PT_RIS_DIMS_PER_VERTEX
+from ...device.types import STRATEGY_MIS
 from ...resampling.ris import RisState, ris_stream
 from ..common.shading import Shading
 from .params import PathReuseParams
 from .path_sample import (MAX_PATH_LENGTH, NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags)
-from .rc_criteria import (lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex,
-                          segment)
+from .rc_criteria import lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex
 
 EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
 
@@ -44,43 +42,6 @@ class BasePath:
     s: RisState
     r: PathReservoir
     rays: int
-
-
-@wp.func
-def bounce_dim(k: int, slot: int) -> wp.uint32:
-    """The dimension of a number drawn at vertex k (the path tracer's per-bounce layout)."""
-    return wp.uint32((k + 1) * DIMS_PER_BOUNCE + slot)
-
-
-@wp.struct
-class Found:
-    """What a BSDF-sampled ray from x_k found: emission (or the environment), the light pdf of
-    that point from x_k (solid angle), the segment x_k -> hit (rc_criteria.segment: unit direction
-    and length; length 0 for the environment)."""
-    Le: wp.vec3
-    p_light: float
-    dir: wp.vec3
-    dist: float
-    is_env: int
-
-
-@wp.func
-def found_along(scene: SceneDevice, hit: SurfaceHit, nh: SurfaceHit, d: wp.vec3) -> Found:
-    """The emission the ray from hit along d found at nh (a miss: the environment)."""
-    f = Found()
-    f.is_env = wp.where(nh.valid == 0, 1, 0)
-    if f.is_env != 0:
-        if scene.env_kind != ENV_NONE:
-            f.Le = env_eval(scene, d)
-            f.p_light = env_pdf(scene, d)
-    else:
-        seg = segment(hit.p, hit.ng, nh.p)
-        f.dir = wp.vec3(seg[0], seg[1], seg[2])
-        f.dist = seg[3]
-        f.Le = triangle_emission(scene, nh.tri, nh.ns, -d)
-        if max3(f.Le) > 0.0:
-            f.p_light = triangle_light_pdf(scene, nh.tri, nh.ng, d, f.dist)
-    return f
 
 
 @wp.func
@@ -127,8 +88,7 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
     while k + 2 <= params.max_depth:
         # ---- NEE at x_k: an event of length k
         if k >= params.first_event and bsdf_is_delta_only(mat) == 0:
-            c = connect_to_light(scene, hit, mat, frame, wi, rng_uniform(seed, bounce_dim(k, DIM_LIGHT_SELECT)),
-                                 rng_uniform2(seed, bounce_dim(k, DIM_LIGHT_POINT)), 1, STRATEGY_MIS)
+            c = nee_at(scene, hit, mat, frame, wi, seed, wp.uint32(0), k, 1, STRATEGY_MIS)
             out.rays += c.rays
             F = wp.cw_mul(beta, c.L)
             p_hat = luminance(F)
@@ -146,8 +106,7 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
                     out.r = event_record(F, pack_flags(k, NO_RC, 0, 0, 1, RC_SURFACE), seed, -1, wp.vec2(0.0),
                                          wp.vec3(0.0), wp.vec3(0.0), wp.vec2(0.0), c.p_light)
         # ---- BSDF sampling at x_k
-        sc = scatter(hit, mat, frame, wi, rng_uniform(seed, bounce_dim(k, DIM_BSDF_LOBE)),
-                     rng_uniform2(seed, bounce_dim(k, DIM_BSDF_DIR)))
+        sc = scatter_at(hit, mat, frame, wi, seed, wp.uint32(0), k)
         if sc.valid == 0:
             break
         w = lobe_weight(mat, wi, sc.bs)

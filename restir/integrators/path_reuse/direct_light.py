@@ -11,21 +11,23 @@ ReSTIR PT"), 8 candidates and 1 round leave ReSTIR PT's error unchanged (within 
 frame 17-33% cheaper: the direct light's share of the error is small beside the indirect paths'
 and the one camera sample's.
 """
-from ..restir_di.pipeline import ReSTIRDI
+import dataclasses
 
-DI_DEFAULTS_IN_PATH_METHODS = {"candidates": 8, "spatial.rounds": 1}
-DI_SETTINGS = {f"di.{k}": DI_DEFAULTS_IN_PATH_METHODS.get(k, v) for k, v in ReSTIRDI.SETTINGS.items()
-               if k != "debug.mutation"}
-DI_SETTINGS_DOC = {k: "ReSTIR DI's " + ReSTIRDI.SETTINGS_DOC[k[3:]] for k in DI_SETTINGS}
+from ...settings import component
+from ..restir_di.pipeline import DISettings, ReSTIRDI
 
 
-def di_settings(settings: dict) -> dict:
+def di_component():
+    """The `di.*` settings field of a path-reuse method's settings: ReSTIR DI's, with the lighter
+    defaults above (8 candidates, 1 spatial round), without its fault injection."""
+    return component("di.", lambda: DISettings(candidates=8, spatial_rounds=1), "ReSTIR DI's ",
+                     exclude=("debug.mutation",))
+
+
+def di_settings(settings) -> DISettings:
     """ReSTIR DI's settings from a path method's: its di.* settings and the shared render settings."""
-    out = {k[3:]: v for k, v in settings.items() if k.startswith("di.")}
-    out.update({k: settings[k] for k in ("seed", "spp", "camera_motion", "camera_speed", "rr_depth",
-                                         "hide_emitters") if k in settings})
-    out.update(max_depth=2, **{"debug.mutation": "none"})
-    return out
+    render = {**settings.render_settings(), "max_depth": 2}
+    return dataclasses.replace(settings.di, **render, debug_mutation="none")
 
 
 def check_di_settings(settings: dict) -> None:
@@ -37,7 +39,7 @@ def attach_direct_light(integ) -> ReSTIRDI | None:
     `emission`), sharing its timer, counters, events and their tally; None with direct=pt or
     max_depth < 2."""
     s = integ.settings
-    if s["direct"] != "restir-di" or s["max_depth"] < 2:
+    if s.direct != "restir-di" or s.max_depth < 2:
         return None
     di = ReSTIRDI(integ.dscene, di_settings(s), str(integ.device), integ.slices,
                   primary=(integ.gbuffers, integ.primary_weight, integ.emission))

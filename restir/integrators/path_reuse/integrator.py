@@ -39,27 +39,27 @@ class PathReuseIntegrator(Integrator):
     SPATIAL_RADIUS_1080 = 20.0
 
     @classmethod
-    def check_path_settings(cls, settings: dict) -> None:
+    def check_path_settings(cls, settings) -> None:
         """The settings every path-reuse method has: shift, direct, candidates, spatial reuse,
         the rc criteria, the fault injection, max_depth, and ReSTIR DI's."""
         from ...config import ConfigError
 
         s = settings
         rounds, neighbors, radius = cls.SPATIAL_KEYS
-        if s["shift"] not in SHIFTS:
+        if s.shift not in SHIFTS:
             raise ConfigError(f"shift must be one of {', '.join(SHIFTS)}")
-        if s["direct"] not in ("restir-di", "pt"):
+        if s.direct not in ("restir-di", "pt"):
             raise ConfigError("direct must be restir-di or pt")
-        if not 1 <= s["candidates"] <= PT_MAX_CANDIDATES:
+        if not 1 <= s.candidates <= PT_MAX_CANDIDATES:
             raise ConfigError(f"candidates must be in [1, {PT_MAX_CANDIDATES}]")
-        if not 0 <= s[rounds] <= MAX_SPATIAL_ROUNDS or not 1 <= s[neighbors] <= PT_MAX_NEIGHBORS:
+        if not 0 <= s.get(rounds) <= MAX_SPATIAL_ROUNDS or not 1 <= s.get(neighbors) <= PT_MAX_NEIGHBORS:
             raise ConfigError(f"{rounds} must be in [0, {MAX_SPATIAL_ROUNDS}] and {neighbors} in [1, {PT_MAX_NEIGHBORS}]")
-        resolve_spatial_radius(s[radius], cls.SPATIAL_RADIUS_1080, 1)
-        if not s["rc.near_distance"] >= 0.0 or not s["rc.roughness"] >= 0.0:
+        resolve_spatial_radius(s.get(radius), cls.SPATIAL_RADIUS_1080, 1)
+        if not s.rc_near_distance >= 0.0 or not s.rc_roughness >= 0.0:
             raise ConfigError("rc.near_distance and rc.roughness must be >= 0")
-        if s["debug.mutation"] not in cls.MUTATIONS:
+        if s.debug_mutation not in cls.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(cls.MUTATIONS)}")
-        if s["max_depth"] > PT_MAX_DEPTH:
+        if s.max_depth > PT_MAX_DEPTH:
             raise ConfigError(f"{cls.name} renders max_depth up to {PT_MAX_DEPTH} (or -1)")
         check_di_settings(s)
 
@@ -70,13 +70,13 @@ class PathReuseIntegrator(Integrator):
         from .path_sample import PathReservoir
 
         s = self.settings
-        if s["max_depth"] < 0:
-            s["max_depth"] = PT_MAX_DEPTH
+        if s.max_depth < 0:
+            s.max_depth = PT_MAX_DEPTH
             self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_MAX_DEPTH}")
         radius_key = self.SPATIAL_KEYS[2]
-        self.spatial_radius = resolve_spatial_radius(s[radius_key], self.SPATIAL_RADIUS_1080, self.height)
-        if s[radius_key] == "auto":
-            s[radius_key] = self.spatial_radius
+        self.spatial_radius = resolve_spatial_radius(s.get(radius_key), self.SPATIAL_RADIUS_1080, self.height)
+        if s.get(radius_key) == "auto":
+            s.set(radius_key, self.spatial_radius)  # the stats report the pixels used
         self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
         self.primary_weight = self.buffer("primary_weight", float)
         self.emission = self.buffer("emission", wp.vec3)
@@ -92,25 +92,25 @@ class PathReuseIntegrator(Integrator):
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
         self.di = attach_direct_light(self)
         # the first vertex whose events the method resamples; paths need max_depth >= first + 2
-        self.first_event = 1 if s["direct"] == "restir-di" else 0
-        self.resamples = s["max_depth"] >= self.first_event + 2
+        self.first_event = 1 if s.direct == "restir-di" else 0
+        self.resamples = s.max_depth >= self.first_event + 2
 
     def pt_params(self, frame: int, sample: int, near_distance: float, temporal_cap: float) -> PathReuseParams:
         """The frame's ReSTIR PT parameters (the path samples' shift, rc criteria and reuse)."""
         s = self.settings
         p = PathReuseParams()
-        p.seed = wp.uint32(s["seed"] & 0xFFFFFFFF)
+        p.seed = wp.uint32(s.seed & 0xFFFFFFFF)
         p.frame = wp.uint32(frame)
         p.sample = sample
-        p.candidates = int(s["candidates"])
-        p.max_depth = int(s["max_depth"])
+        p.candidates = int(s.candidates)
+        p.max_depth = int(s.max_depth)
         p.first_event = self.first_event
-        p.shift = int(SHIFTS[s["shift"]])
+        p.shift = int(SHIFTS[s.shift])
         p.near_distance = float(near_distance)
-        p.rough_threshold = float(s["rc.roughness"])
+        p.rough_threshold = float(s.rc_roughness)
         p.temporal_cap = float(temporal_cap)
         p.spatial_round = 0
-        p.spatial_k = int(s[self.SPATIAL_KEYS[1]])
+        p.spatial_k = int(s.get(self.SPATIAL_KEYS[1]))
         p.spatial_radius = float(self.spatial_radius)
         return p
 
@@ -135,8 +135,8 @@ class PathReuseIntegrator(Integrator):
         method's resampling passes and output (`resample_sample`), then this sample's final
         reservoirs and primary hits become the next one's history."""
         self.run_stage("gbuffer", primary_hits_kernel,
-                       [self.dscene.scene, camera, wp.uint32(self.settings["seed"] & 0xFFFFFFFF), wp.uint32(frame),
-                        sample, int(bool(self.settings["hide_emitters"]))],
+                       [self.dscene.scene, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame),
+                        sample, int(bool(self.settings.hide_emitters))],
                        [self.gbuffers.current, self.primary_weight, self.emission])
         direct = self.emission
         if self.di is not None:

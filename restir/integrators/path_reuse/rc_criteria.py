@@ -18,23 +18,8 @@ roughplastic has two smooth lobes; for every other material the two coincide.
 import warp as wp
 
 from ...device.bsdf import BSDFSample, Material, bsdf_eval_lobes, bsdf_has_rough_component, bsdf_pdf_lobes, lobe_is_rough
-from ...device.intersect import offset_origin
 from ...device.types import MAT_ROUGHPLASTIC
 from .params import SHIFT_HYBRID, SHIFT_RECONNECTION, PathReuseParams
-
-
-@wp.func
-def segment(p: wp.vec3, ng: wp.vec3, q: wp.vec3) -> wp.vec4:
-    """(unit direction, length) of the path segment from surface point p (geometric normal ng) to
-    q, measured from p's ray origin (offset off the surface, as the traced ray's was): the base
-    path and every shift of it then see the same segment to float precision."""
-    o = offset_origin(p, ng, q - p)
-    v = q - o
-    dist = wp.length(v)
-    if dist <= 0.0:
-        return wp.vec4(0.0)
-    v = v / dist
-    return wp.vec4(v[0], v[1], v[2], dist)
 
 
 @wp.func

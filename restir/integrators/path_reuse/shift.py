@@ -30,24 +30,22 @@ Warp module of its own; the shipped shift (`shift_path`) is built with none.
 """
 import warp as wp
 
+from ...device.bounce import found_along, nee_at, scatter_at, segment
 from ...device.bsdf import Material, bsdf_eval, bsdf_is_delta_only, bsdf_pdf, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, is_visible, offset_origin, surface_at, trace_closest, visible_to_light
 from ...device.lights import env_eval, env_pdf, triangle_emission
-from ...device.path_steps import connect_to_light, emission_mis_weight, scatter
-from ...device.rng import rng_uniform, rng_uniform2
+from ...device.path_steps import emission_mis_weight
 from ...device.sampling import Frame, frame_from_normal, to_local
 from ...device.scene_device import SceneDevice, material_at
-from ...device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
-from .base_path import bounce_dim, found_along
 from .domain import Domain
 from .params import SHIFT_HYBRID, PathReuseParams
 from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, PathReservoir, ends_with_nee, holds_path, lobe_at_rc,
                           lobe_at_rc_prev, path_length, rc_kind, rc_length)
-from .rc_criteria import (segment, eval_lobe, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex,
+from .rc_criteria import (eval_lobe, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex,
                           qualifies_scatter_vertex)
 
 
@@ -114,8 +112,7 @@ def make_shift(mutation: str = "none"):
         y.beta = wp.vec3(1.0)
         k = int(0)
         while k < n:
-            sc = scatter(y.hit, y.mat, y.frame, y.wi, rng_uniform(seed, bounce_dim(k + dim_offset, DIM_BSDF_LOBE)),
-                         rng_uniform2(seed, bounce_dim(k + dim_offset, DIM_BSDF_DIR)))
+            sc = scatter_at(y.hit, y.mat, y.frame, y.wi, seed, wp.uint32(0), k + dim_offset)
             if sc.valid == 0:
                 y.valid = 0
                 return y
@@ -154,14 +151,11 @@ def make_shift(mutation: str = "none"):
             if wp.static(check_destination):
                 if qualifies_nee_vertex(params, j, y.dist_in, y.prev_rough != 0, y.mat):
                     return res
-            c = connect_to_light(scene, y.hit, y.mat, y.frame, y.wi,
-                                 rng_uniform(seed, bounce_dim(j + dim_offset, DIM_LIGHT_SELECT)),
-                                 rng_uniform2(seed, bounce_dim(j + dim_offset, DIM_LIGHT_POINT)), 1, STRATEGY_MIS)
+            c = nee_at(scene, y.hit, y.mat, y.frame, y.wi, seed, wp.uint32(0), j + dim_offset, 1, STRATEGY_MIS)
             res.rays = c.rays
             F = wp.cw_mul(y.beta, c.L)
         else:
-            sc = scatter(y.hit, y.mat, y.frame, y.wi, rng_uniform(seed, bounce_dim(j + dim_offset, DIM_BSDF_LOBE)),
-                         rng_uniform2(seed, bounce_dim(j + dim_offset, DIM_BSDF_DIR)))
+            sc = scatter_at(y.hit, y.mat, y.frame, y.wi, seed, wp.uint32(0), j + dim_offset)
             if sc.valid == 0:
                 return res
             if wp.static(check_destination):

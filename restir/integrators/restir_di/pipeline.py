@@ -3,11 +3,15 @@ spatial reuse rounds, shading.
 
 render_sample is the table of contents; each stage is one kernel in its own file.
 """
+import dataclasses
+
 import warp as wp
 
 from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS, MAX_SPATIAL_ROUNDS
+from ...settings import MUTATION_DOC, Settings, setting
 from ..base import Integrator
 from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
 from .params import DIParams
@@ -18,58 +22,49 @@ from .s3_temporal import make_temporal_kernel, temporal_kernel
 from .s4_spatial import make_spatial_kernel, spatial_kernel
 from .s5_shade import shade_kernel
 
-# Fault injections for the mutation tests (TESTING.md 5.11), each a build of the stage kernels
-# (or, for the race, of the pipeline) that the harness refuses unless asked. The shipped kernels
-# are built without any of them.
-MUTATIONS = {
-    "none": {},
-    "drop_empty_neighbors": {"spatial": {"drop_empty_neighbors": True}},            # A3
-    "skip_zero_canonical": {"temporal": {"skip_zero_canonical": True},
-                            "spatial": {"skip_zero_canonical": True}},              # A1
-    "temporal_overweight": {"temporal": {"overweight_history": True}},              # feedback loop
-    "spatial_in_place": {},          # the spatial pass writes its own input (race, R2)
-    "bsdf_unshadowed_reuse": {},     # lets check_settings accept a biased combination
-}
-_mutant_kernels: dict = {}
+# Fault injections for the mutation tests (common/mutations.py), each a build of the (temporal,
+# spatial) kernels or, for the race and the check, of the pipeline.
+MUTATIONS = Mutations((temporal_kernel, spatial_kernel), {
+    "drop_empty_neighbors": lambda: (temporal_kernel, make_spatial_kernel(drop_empty_neighbors=True)),  # A3
+    "skip_zero_canonical": lambda: (make_temporal_kernel(skip_zero_canonical=True),                     # A1
+                                    make_spatial_kernel(skip_zero_canonical=True)),
+    "temporal_overweight": lambda: (make_temporal_kernel(overweight_history=True), spatial_kernel),   # feedback
+    "spatial_in_place": None,        # the spatial pass writes its own input (race, R2)
+    "bsdf_unshadowed_reuse": None,   # lets check_settings accept a biased combination
+})
 
 
-def stage_kernels(mutation: str) -> tuple:
-    """(temporal, spatial) kernels of a build: the shipped ones, or a mutation's (built once)."""
-    spec = MUTATIONS[mutation]
-    if not spec.get("temporal") and not spec.get("spatial"):
-        return temporal_kernel, spatial_kernel
-    if mutation not in _mutant_kernels:
-        _mutant_kernels[mutation] = (make_temporal_kernel(**spec.get("temporal", {})),
-                                     make_spatial_kernel(**spec.get("spatial", {})))
-    return _mutant_kernels[mutation]
+# Defaults chosen by measurement with a jittered camera (BENCHMARKS.md, "ReSTIR DI defaults"): 32
+# light candidates; temporal reuse with the history capped at 5x the current confidence (the
+# literature's 20x drifts into blotches); spatial reuse with 3 neighbours, 2 rounds, in a radius of
+# 15 px at 1080 lines scaled with the image height, at least 2 px (the literature's 30 px at any
+# size left reuse nearly idle on small images).
+@dataclasses.dataclass
+class DISettings(Settings):
+    candidates: int = setting("candidates", 32, "light-sampled candidates N_L of the initial RIS")
+    candidates_bsdf: int = setting("candidates.bsdf", 1, "BSDF-sampled candidates N_B (with reuse: needs "
+                                   "visibility=reuse)")
+    visibility: str = setting("visibility", "reuse", "reuse: visibility-aware targets (a visibility stage); "
+                              "shading: V traced at shading only")
+    temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs")
+    temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one "
+                                  "(<= 0: no cap, i.e. 1e6 x)")
+    spatial_rounds: int = setting("spatial.rounds", 2, "spatial reuse rounds")
+    spatial_neighbors: int = setting("spatial.neighbors", 3, "neighbours per round (pairwise MIS)")
+    spatial_radius: str = setting("spatial.radius", "auto", "neighbour disk radius in pixels; auto: 15 px at 1080 "
+                                  "lines scaled with the height, >= 2")
+    debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
 
 
 class ReSTIRDI(Integrator):
     name = "restir-di"
     STAGES = ("gbuffer", "initial", "visibility", "temporal", "spatial", "shade")
     KERNELS = (primary_hits_kernel, initial_kernel, visibility_kernel, temporal_kernel, spatial_kernel, shade_kernel)
-    # Defaults chosen by measurement with a jittered camera (BENCHMARKS.md, "ReSTIR DI defaults"):
-    # 32 light candidates; temporal reuse with the history capped at 5x the current confidence
-    # (the literature's 20x drifts into blotches); spatial reuse with 3 neighbours, 2 rounds, in
-    # a radius of 15 px at 1080 lines scaled with the image height, at least 2 px (the
-    # literature's 30 px at any size left reuse nearly idle on small images).
-    SETTINGS = {"candidates": 32, "candidates.bsdf": 1, "visibility": "reuse", "temporal": True, "temporal.cap": 5.0,
-                "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": "auto", "debug.mutation": "none"}
-    SETTINGS_DOC = {
-        "candidates": "light-sampled candidates N_L of the initial RIS",
-        "candidates.bsdf": "BSDF-sampled candidates N_B (with reuse: needs visibility=reuse)",
-        "visibility": "reuse: visibility-aware targets (a visibility stage); shading: V traced at shading only",
-        "temporal": "temporal reuse of the previous frame's reservoirs",
-        "temporal.cap": "history confidence capped to this x the current one (<= 0: no cap, i.e. 1e6 x)",
-        "spatial.rounds": "spatial reuse rounds",
-        "spatial.neighbors": "neighbours per round (pairwise MIS)",
-        "spatial.radius": "neighbour disk radius in pixels; auto: 15 px at 1080 lines scaled with the height, >= 2",
-        "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
-    }
+    Settings = DISettings
     DESCRIPTION = "ReSTIR DI (direct light, max_depth 2): initial RIS, visibility, temporal and spatial reuse"
     SPATIAL_RADIUS_1080 = 15.0  # "auto" radius in pixels at 1080 lines (integrators/common/reuse_domains.py)
     VISIBILITY = ("reuse", "shading")
-    MUTATIONS = tuple(MUTATIONS)
+    MUTATIONS = MUTATIONS
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
 
     def __init__(self, *args, primary=None, **kw):
@@ -79,37 +74,37 @@ class ReSTIRDI(Integrator):
         super().__init__(*args, **kw)
 
     @staticmethod
-    def check_settings(settings: dict) -> None:
+    def check_settings(settings: DISettings) -> None:
         from ...config import ConfigError
 
-        if settings["candidates"] < 0 or settings["candidates.bsdf"] < 0 or \
-                not 1 <= settings["candidates"] + settings["candidates.bsdf"] <= DI_MAX_CANDIDATES:
+        if settings.candidates < 0 or settings.candidates_bsdf < 0 or \
+                not 1 <= settings.candidates + settings.candidates_bsdf <= DI_MAX_CANDIDATES:
             raise ConfigError("candidates and candidates.bsdf must be >= 0, with at least one candidate "
                               f"and at most {DI_MAX_CANDIDATES} together")
-        if settings["visibility"] not in ReSTIRDI.VISIBILITY:
+        if settings.visibility not in ReSTIRDI.VISIBILITY:
             raise ConfigError(f"visibility must be one of {', '.join(ReSTIRDI.VISIBILITY)}")
-        reuse = settings["temporal"] or settings["spatial.rounds"] > 0
-        if settings["candidates.bsdf"] > 0 and settings["visibility"] == "shading" and reuse and \
-                settings["debug.mutation"] != "bsdf_unshadowed_reuse":
+        reuse = settings.temporal or settings.spatial_rounds > 0
+        if settings.candidates_bsdf > 0 and settings.visibility == "shading" and reuse and \
+                settings.debug_mutation != "bsdf_unshadowed_reuse":
             # p_B omits V, so W is valid only for visibility-aware targets once samples are reused
             raise ConfigError("candidates.bsdf > 0 with reuse needs visibility=reuse "
                               "(unshadowed reuse of BSDF candidates is biased; see docs/restir_di.md)")
-        if not 0 <= settings["spatial.rounds"] <= MAX_SPATIAL_ROUNDS or \
-                not 1 <= settings["spatial.neighbors"] <= DI_MAX_NEIGHBORS:
+        if not 0 <= settings.spatial_rounds <= MAX_SPATIAL_ROUNDS or \
+                not 1 <= settings.spatial_neighbors <= DI_MAX_NEIGHBORS:
             raise ConfigError(f"spatial.rounds must be in [0, {MAX_SPATIAL_ROUNDS}] and spatial.neighbors in "
                               f"[1, {DI_MAX_NEIGHBORS}]")
-        resolve_spatial_radius(settings["spatial.radius"], ReSTIRDI.SPATIAL_RADIUS_1080, 1)  # raises if invalid
-        if settings["debug.mutation"] not in ReSTIRDI.MUTATIONS:
+        resolve_spatial_radius(settings.spatial_radius, ReSTIRDI.SPATIAL_RADIUS_1080, 1)  # raises if invalid
+        if settings.debug_mutation not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
 
     def kernels(self) -> tuple:
-        return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
+        return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
 
     def allocate(self) -> None:
-        self.spatial_radius = resolve_spatial_radius(self.settings["spatial.radius"], self.SPATIAL_RADIUS_1080,
+        self.spatial_radius = resolve_spatial_radius(self.settings.spatial_radius, self.SPATIAL_RADIUS_1080,
                                                      self.height)
-        if self.settings["spatial.radius"] == "auto":
-            self.settings["spatial.radius"] = self.spatial_radius  # the stats report the pixels used
+        if self.settings.spatial_radius == "auto":
+            self.settings.spatial_radius = self.spatial_radius  # the stats report the pixels used
         if self.primary is None:
             # this sample's primary hits and the previous sample's (the temporal technique's domain)
             self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
@@ -125,16 +120,16 @@ class ReSTIRDI(Integrator):
 
     def params(self, frame: int, sample: int) -> DIParams:
         p = DIParams()
-        p.seed = wp.uint32(self.settings["seed"] & 0xFFFFFFFF)
+        p.seed = wp.uint32(self.settings.seed & 0xFFFFFFFF)
         p.frame = wp.uint32(frame)
         p.sample = sample
-        p.candidates = int(self.settings["candidates"])
-        p.bsdf_candidates = int(self.settings["candidates.bsdf"])
-        p.visibility = int(self.settings["visibility"] == "reuse")
-        p.hide_emitters = int(bool(self.settings["hide_emitters"]))
-        p.temporal_cap = float(self.settings["temporal.cap"])
+        p.candidates = int(self.settings.candidates)
+        p.bsdf_candidates = int(self.settings.candidates_bsdf)
+        p.visibility = int(self.settings.visibility == "reuse")
+        p.hide_emitters = int(bool(self.settings.hide_emitters))
+        p.temporal_cap = float(self.settings.temporal_cap)
         p.spatial_round = 0
-        p.spatial_k = int(self.settings["spatial.neighbors"])
+        p.spatial_k = int(self.settings.spatial_neighbors)
         p.spatial_radius = float(self.spatial_radius)
         return p
 
@@ -148,16 +143,16 @@ class ReSTIRDI(Integrator):
     def resample_and_shade(self, frame: int, sample: int) -> None:
         """Every stage after the primary hits, for one sample: direct light into `sample_L`."""
         sc = self.dscene.scene
-        temporal, spatial = stage_kernels(self.settings["debug.mutation"])
-        in_place = self.settings["debug.mutation"] == "spatial_in_place"
+        temporal, spatial = MUTATIONS.kernels(self.settings.debug_mutation)
+        in_place = self.settings.debug_mutation == "spatial_in_place"
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         self.run_stage("initial", initial_kernel, [sc, p, gb.current], [res.current])
         if p.visibility:
             self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
-        if self.settings["temporal"] and self.prev_camera is not None:
+        if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
-        for rd in range(self.settings["spatial.rounds"]):
+        for rd in range(self.settings.spatial_rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place=in_place)
         self.run_stage("shade", shade_kernel, [sc, p, gb.current, self.primary_weight, self.emission,

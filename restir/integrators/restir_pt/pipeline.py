@@ -3,10 +3,15 @@ unless direct=pt), trace and initial RIS, temporal reuse, spatial reuse rounds, 
 
 render_sample is the table of contents; each stage is one kernel in its own file.
 """
+import dataclasses
+import functools
+
 import numpy as np
 
+from ...settings import MUTATION_DOC, Settings, setting
+from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
-from ..path_reuse.direct_light import DI_SETTINGS, DI_SETTINGS_DOC
+from ..path_reuse.direct_light import DISettings, di_component
 from ..path_reuse.integrator import PathReuseIntegrator
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
@@ -16,30 +21,46 @@ from .s2_temporal import make_temporal_kernel, temporal_kernel
 from .s3_spatial import make_spatial_kernel, spatial_kernel
 from .s4_shade import shade_kernel
 
-# Fault injections for the mutation tests (TESTING.md 5.11), each a build of the stage kernels
-# (or, for the race, of the pipeline) that the harness refuses unless asked; the shipped
-# kernels are built with none of them.
-MUTATIONS = ("none", *SHIFT_MUTATIONS, "m_per_event", "drop_failed_shifts", "spatial_in_place")
-_mutant_kernels: dict = {}
+
+def _shift_mutant(mutation: str) -> tuple:
+    shift, module = make_shift(mutation), f"restir_pt_{mutation}"
+    return initial_kernel, make_temporal_kernel(shift, module=module), make_spatial_kernel(shift, module=module)
 
 
-def stage_kernels(mutation: str) -> tuple:
-    """(initial, temporal, spatial) kernels of a build: the shipped ones, or a mutation's."""
-    if mutation in ("none", "spatial_in_place"):
-        return initial_kernel, temporal_kernel, spatial_kernel
-    if mutation not in _mutant_kernels:
-        module = f"restir_pt_{mutation}"
-        if mutation in SHIFT_MUTATIONS:
-            shift = make_shift(mutation)
-            kernels = (initial_kernel, make_temporal_kernel(shift, module=module),
-                       make_spatial_kernel(shift, module=module))
-        elif mutation == "m_per_event":
-            kernels = (make_initial_kernel(m_per_event=True), temporal_kernel, spatial_kernel)
-        else:  # drop_failed_shifts
-            kernels = (initial_kernel, make_temporal_kernel(drop_failed=True, module=module),
-                       make_spatial_kernel(drop_failed=True, module=module))
-        _mutant_kernels[mutation] = kernels
-    return _mutant_kernels[mutation]
+# Fault injections for the mutation tests (common/mutations.py), each a build of the (initial,
+# temporal, spatial) kernels or, for the race, of the pipeline.
+MUTATIONS = Mutations((initial_kernel, temporal_kernel, spatial_kernel), {
+    **{m: functools.partial(_shift_mutant, m) for m in SHIFT_MUTATIONS},
+    "m_per_event": lambda: (make_initial_kernel(m_per_event=True), temporal_kernel, spatial_kernel),
+    "drop_failed_shifts": lambda: (initial_kernel,
+                                   make_temporal_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
+                                   make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
+    "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
+})
+
+
+# The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image; the
+# temporal cap of 20 was also the best of 1-50 and none by measurement (BENCHMARKS.md).
+@dataclasses.dataclass
+class PTSettings(Settings):
+    shift: str = setting("shift", "hybrid", "hybrid: replay to the first vertex that qualifies, then reconnect; "
+                         "reconnection: always at x2; replay: the whole path")
+    direct: str = setting("direct", "restir-di", "restir-di: direct light at the primary hit from ReSTIR DI (the "
+                          "di.* settings); pt: ReSTIR PT resamples every path")
+    candidates: int = setting("candidates", 1, "base paths per pixel (streaming RIS over their events; M = 1 per "
+                              "path)")
+    temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
+    temporal_cap: float = setting("temporal.cap", 20.0, "history confidence capped to this x the current one (<= 0: "
+                                  "no cap, i.e. 1e6 x)")
+    spatial_rounds: int = setting("spatial.rounds", 1, "spatial reuse rounds (pairwise MIS)")
+    spatial_neighbors: int = setting("spatial.neighbors", 3, "neighbours per round")
+    spatial_radius: str = setting("spatial.radius", "auto", "neighbour disk radius in pixels; auto: 20 px at 1080 "
+                                  "lines scaled with the height, >= 2")
+    rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
+    rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
+                                  "are rough")
+    debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
+    di: DISettings = di_component()
 
 
 class ReSTIRPT(PathReuseIntegrator):
@@ -47,27 +68,7 @@ class ReSTIRPT(PathReuseIntegrator):
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "trace_initial",
               "temporal", "spatial", "shade")
     KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
-    # The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image; the
-    # temporal cap of 20 was also the best of 1-50 and none by measurement (BENCHMARKS.md).
-    SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "temporal": True, "temporal.cap": 20.0,
-                "spatial.rounds": 1, "spatial.neighbors": 3, "spatial.radius": "auto", "rc.near_distance": 0.1,
-                "rc.roughness": 0.2, "debug.mutation": "none", **DI_SETTINGS}
-    SETTINGS_DOC = {
-        "shift": "hybrid: replay to the first vertex that qualifies, then reconnect; reconnection: always at x2; "
-                 "replay: the whole path",
-        "direct": "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings); pt: ReSTIR PT "
-                  "resamples every path",
-        "candidates": "base paths per pixel (streaming RIS over their events; M = 1 per path)",
-        "temporal": "temporal reuse of the previous frame's reservoirs (Talbot MIS)",
-        "temporal.cap": "history confidence capped to this x the current one (<= 0: no cap, i.e. 1e6 x)",
-        "spatial.rounds": "spatial reuse rounds (pairwise MIS)",
-        "spatial.neighbors": "neighbours per round",
-        "spatial.radius": "neighbour disk radius in pixels; auto: 20 px at 1080 lines scaled with the height, >= 2",
-        "rc.near_distance": "hybrid: shortest reconnection segment, scene units",
-        "rc.roughness": "hybrid: glossy lobes with a linear roughness above this are rough",
-        "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
-        **DI_SETTINGS_DOC,
-    }
+    Settings = PTSettings
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
     SPATIAL_RADIUS_1080 = 20.0
     MUTATIONS = MUTATIONS
@@ -75,11 +76,11 @@ class ReSTIRPT(PathReuseIntegrator):
     RESERVOIRS = "reservoirs"
 
     @staticmethod
-    def check_settings(settings: dict) -> None:
+    def check_settings(settings: PTSettings) -> None:
         ReSTIRPT.check_path_settings(settings)
 
     def kernels(self) -> tuple:
-        return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
+        return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
 
     def allocate(self) -> None:
         self.allocate_path_reuse()
@@ -87,18 +88,18 @@ class ReSTIRPT(PathReuseIntegrator):
 
     def params(self, frame: int, sample: int) -> PathReuseParams:
         s = self.settings
-        return self.pt_params(frame, sample, s["rc.near_distance"], s["temporal.cap"])
+        return self.pt_params(frame, sample, s.rc_near_distance, s.temporal_cap)
 
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
-        mutation = self.settings["debug.mutation"]
-        initial, temporal, spatial = stage_kernels(mutation)
+        mutation = self.settings.debug_mutation
+        initial, temporal, spatial = MUTATIONS.kernels(mutation)
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         self.run_stage("trace_initial", initial, [sc, p, gb.current], [res.current])
-        if self.settings["temporal"] and self.prev_camera is not None:
+        if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
-        for rd in range(self.settings["spatial.rounds"]):
+        for rd in range(self.settings.spatial_rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
                             mutation == "spatial_in_place")

@@ -4,16 +4,20 @@ reuse, the prefix search structure, suffix trace, suffix temporal and spatial re
 
 render_sample is the table of contents; each stage is one kernel in its own file.
 """
+import dataclasses
+import functools
 import math
 
 import numpy as np
 import warp as wp
 
 from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
+from ...settings import MUTATION_DOC, Settings, setting
 from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
-from ..path_reuse.direct_light import DI_SETTINGS, DI_SETTINGS_DOC
+from ..path_reuse.direct_light import DISettings, di_component
 from ..path_reuse.integrator import PathReuseIntegrator
 from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
@@ -23,23 +27,78 @@ from .s4_suffix_spatial import suffix_spatial_kernel
 from .s5_gather import GATHER_MUTATIONS, gather_kernel, make_gather
 from .s2_search import SEARCHES, GridEntry, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
 
-# Fault injections for the mutation tests (TESTING.md 5.11), each a build of a stage kernel that
-# the harness refuses unless asked; the shipped kernels are built with none of them.
-MUTATIONS = ("none", *SUFFIX_MUTATIONS, *GATHER_MUTATIONS, "spatial_in_place")
-_mutant_kernels: dict = {}
+def _suffix_mutant(mutation: str) -> tuple:
+    return make_suffix_kernel(mutation), gather_kernel
 
 
-def stage_kernels(mutation: str) -> tuple:
-    """(suffix, gather) kernels of a build: the shipped ones, or a mutation's (built once)."""
-    if mutation in ("none", "spatial_in_place"):  # the race is a build of the pipeline, not of a kernel
-        return suffix_kernel, gather_kernel
-    if mutation not in _mutant_kernels:
-        if mutation in SUFFIX_MUTATIONS:
-            _mutant_kernels[mutation] = (make_suffix_kernel(mutation), gather_kernel)
-        else:
-            _mutant_kernels[mutation] = (suffix_kernel, make_gather(module=f"suffix_restir_{mutation}",
-                                                                    mutation=mutation).kernel)
-    return _mutant_kernels[mutation]
+def _gather_mutant(mutation: str) -> tuple:
+    return suffix_kernel, make_gather(module=f"suffix_restir_{mutation}", mutation=mutation).kernel
+
+
+# Fault injections for the mutation tests (common/mutations.py), each a build of the (suffix,
+# gather) kernels or, for the race, of the pipeline.
+MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
+    **{m: functools.partial(_suffix_mutant, m) for m in SUFFIX_MUTATIONS},
+    **{m: functools.partial(_gather_mutant, m) for m in GATHER_MUTATIONS},
+    "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
+})
+
+
+# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
+@dataclasses.dataclass
+class SuffixSettings(Settings):
+    shift: str = setting("shift", "hybrid", "the suffix shift: hybrid (replay to the first vertex that qualifies, "
+                         "then reconnect), reconnection (at the vertex after the prefix end), replay")
+    direct: str = setting("direct", "restir-di", "restir-di: direct light at the primary hit from ReSTIR DI (the "
+                          "di.* settings); pt: prefixes and suffixes own every event")
+    candidates: int = setting("candidates", 1, "suffixes traced per pixel at its resampled prefix end (streaming "
+                              "RIS; M = 1 each)")
+    rc_near_distance: float = setting("rc.near_distance", 0.03, "hybrid: shortest suffix reconnection segment, x "
+                                      "the scene's smallest extent")
+    rc_roughness: float = setting("rc.roughness", 0.2, "glossy lobes with a linear roughness above this are rough "
+                                  "(prefix ends, rc vertices)")
+    prefix_min_length: int = setting("prefix.min_length", 1, "the prefix end's smallest vertex index (1: x2 at the "
+                                     "earliest)")
+    prefix_adaptive: bool = setting("prefix.adaptive", True, "the prefix ends one vertex after the first rough "
+                                    "bounce (false: exactly at min_length)")
+    prefix_avoid_specular_end: bool = setting("prefix.avoid_specular_end", True, "adaptive prefixes: a "
+                                              "specular-only end vertex is rejected (the search goes on)")
+    prefix_avoid_short_end: bool = setting("prefix.avoid_short_end", True, "adaptive prefixes: an end vertex "
+                                           "reached over a short segment is rejected")
+    prefix_short_segment: float = setting("prefix.short_segment", 0.01, "a prefix end reached over a segment this "
+                                          "short (x the scene's smallest extent) is rejected")
+    prefix_temporal: bool = setting("prefix.temporal", True, "temporal reuse of prefixes (pairwise, K = 1)")
+    prefix_temporal_cap: float = setting("prefix.temporal.cap", 50.0, "prefix history confidence capped to this x "
+                                         "the current one (<= 0: no cap)")
+    suffix_temporal: bool = setting("suffix.temporal", True, "temporal reuse of suffixes (pairwise, K = 1)")
+    suffix_temporal_cap: float = setting("suffix.temporal.cap", 50.0, "suffix history confidence capped to this "
+                                         "(absolute; <= 0: no cap)")
+    suffix_spatial_rounds: int = setting("suffix.spatial.rounds", 1, "suffix spatial reuse rounds (pairwise MIS)")
+    suffix_spatial_neighbors: int = setting("suffix.spatial.neighbors", 3, "neighbours per round")
+    suffix_spatial_radius: str = setting("suffix.spatial.radius", "auto", "neighbour disk radius in pixels; auto: "
+                                         "30 px at 1080 lines scaled with the height, >= 2")
+    gather_prefixes: int = setting("gather.prefixes", 4, "N: fresh prefixes per pixel in the final gather")
+    gather_suffixes: int = setting("gather.suffixes", 1, "M: neighbour suffixes gathered per prefix "
+                                   f"(1-{SR_MAX_GATHER_SUFFIXES})")
+    gather_mis: str = setting("gather.mis", "talbot", "talbot (generalized balance over neighbours and the "
+                              "canonical suffix) or pairwise")
+    gather_cap: float = setting("gather.cap", 50.0, "neighbour confidences capped to this in the gather (absolute; "
+                                "<= 0: no cap)")
+    gather_radius: float = setting("gather.radius", 2.0, "search box half-size: this x the path footprint camera "
+                                   "-> prefix end x the pixel spread angle (raycone), or this x the scene's smallest "
+                                   "extent / the larger image side (fixed)")
+    gather_radius_type: str = setting("gather.radius_type", "raycone", "raycone (the path's footprint) or fixed")
+    gather_fallback_radius: str = setting("gather.fallback_radius", "auto", "unfilled gather slots: random pixels "
+                                          "in a disk of this radius; auto: 30 px at 1080 lines scaled with the "
+                                          "height, >= 2")
+    gather_search: str = setting("gather.search", "grid", "the prefix search structure: grid (a hashed grid sorted "
+                                 "by cell), hashgrid (wp.HashGrid over the box centres) or bvh (wp.Bvh over the "
+                                 "boxes); all find the same neighbours")
+    gather_canonical_per_prefix: bool = setting("gather.canonical_per_prefix", False, "trace the canonical suffix "
+                                                "for every gathered prefix (weight 1) instead of for prefix 0 only, "
+                                                "weighted by N")
+    debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
+    di: DISettings = di_component()
 
 
 class SuffixReSTIR(PathReuseIntegrator):
@@ -48,54 +107,7 @@ class SuffixReSTIR(PathReuseIntegrator):
               "suffix", "suffix_spatial", "gather")
     KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel,
                suffix_spatial_kernel, gather_kernel)
-    # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
-    SETTINGS = {"shift": "hybrid", "direct": "restir-di", "candidates": 1, "rc.near_distance": 0.03,
-                "rc.roughness": 0.2, "prefix.min_length": 1, "prefix.adaptive": True, "prefix.avoid_specular_end": True,
-                "prefix.avoid_short_end": True, "prefix.short_segment": 0.01, "prefix.temporal": True,
-                "prefix.temporal.cap": 50.0, "suffix.temporal": True, "suffix.temporal.cap": 50.0,
-                "suffix.spatial.rounds": 1, "suffix.spatial.neighbors": 3, "suffix.spatial.radius": "auto",
-                "gather.prefixes": 4, "gather.suffixes": 1, "gather.mis": "talbot", "gather.cap": 50.0,
-                "gather.radius": 2.0, "gather.radius_type": "raycone", "gather.fallback_radius": "auto",
-                "gather.search": "grid", "gather.canonical_per_prefix": False,
-                "debug.mutation": "none", **DI_SETTINGS}
-    SETTINGS_DOC = {
-        "shift": "the suffix shift: hybrid (replay to the first vertex that qualifies, then reconnect), "
-                 "reconnection (at the vertex after the prefix end), replay",
-        "direct": "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings); pt: prefixes "
-                  "and suffixes own every event",
-        "candidates": "suffixes traced per pixel at its resampled prefix end (streaming RIS; M = 1 each)",
-        "rc.near_distance": "hybrid: shortest suffix reconnection segment, x the scene's smallest extent",
-        "rc.roughness": "glossy lobes with a linear roughness above this are rough (prefix ends, rc vertices)",
-        "prefix.min_length": "the prefix end's smallest vertex index (1: x2 at the earliest)",
-        "prefix.adaptive": "the prefix ends one vertex after the first rough bounce (false: exactly at min_length)",
-        "prefix.avoid_specular_end": "adaptive prefixes: a specular-only end vertex is rejected (the search goes on)",
-        "prefix.avoid_short_end": "adaptive prefixes: an end vertex reached over a short segment is rejected",
-        "prefix.short_segment": "a prefix end reached over a segment this short (x the scene's smallest extent) "
-                                "is rejected",
-        "prefix.temporal": "temporal reuse of prefixes (pairwise, K = 1)",
-        "prefix.temporal.cap": "prefix history confidence capped to this x the current one (<= 0: no cap)",
-        "suffix.temporal": "temporal reuse of suffixes (pairwise, K = 1)",
-        "suffix.temporal.cap": "suffix history confidence capped to this (absolute; <= 0: no cap)",
-        "suffix.spatial.rounds": "suffix spatial reuse rounds (pairwise MIS)",
-        "suffix.spatial.neighbors": "neighbours per round",
-        "suffix.spatial.radius": "neighbour disk radius in pixels; auto: 30 px at 1080 lines scaled with the "
-                                 "height, >= 2",
-        "gather.prefixes": "N: fresh prefixes per pixel in the final gather",
-        "gather.suffixes": f"M: neighbour suffixes gathered per prefix (1-{SR_MAX_GATHER_SUFFIXES})",
-        "gather.mis": "talbot (generalized balance over neighbours and the canonical suffix) or pairwise",
-        "gather.cap": "neighbour confidences capped to this in the gather (absolute; <= 0: no cap)",
-        "gather.radius": "search box half-size: this x the path footprint camera -> prefix end x the pixel "
-                         "spread angle (raycone), or this x the scene's smallest extent / the larger image side (fixed)",
-        "gather.radius_type": "raycone (the path's footprint) or fixed",
-        "gather.canonical_per_prefix": "trace the canonical suffix for every gathered prefix (weight 1) instead of for "
-                                       "prefix 0 only, weighted by N",
-        "gather.fallback_radius": "unfilled gather slots: random pixels in a disk of this radius; auto: 30 px at "
-                                  "1080 lines scaled with the height, >= 2",
-        "gather.search": "the prefix search structure: grid (a hashed grid sorted by cell), hashgrid (wp.HashGrid "
-                         "over the box centres) or bvh (wp.Bvh over the boxes); all find the same neighbours",
-        "debug.mutation": "fault injection for the mutation tests (biased; the harness refuses it)",
-        **DI_SETTINGS_DOC,
-    }
+    Settings = SuffixSettings
     DESCRIPTION = ("Suffix ReSTIR (conditional RIS): prefix and suffix reuse, a prefix search structure and a final "
                    "gather of suffixes from neighbouring prefixes")
     SPATIAL_RADIUS_1080 = 30.0
@@ -108,44 +120,44 @@ class SuffixReSTIR(PathReuseIntegrator):
     PASS_BUFFER = False
 
     @staticmethod
-    def check_settings(settings: dict) -> None:
+    def check_settings(settings: SuffixSettings) -> None:
         from ...config import ConfigError
 
         s = settings
         SuffixReSTIR.check_path_settings(s)
-        resolve_spatial_radius(s["gather.fallback_radius"], SuffixReSTIR.SPATIAL_RADIUS_1080, 1)
-        if not 1 <= s["gather.prefixes"] <= SR_MAX_GATHER_PREFIXES:
+        resolve_spatial_radius(s.gather_fallback_radius, SuffixReSTIR.SPATIAL_RADIUS_1080, 1)
+        if not 1 <= s.gather_prefixes <= SR_MAX_GATHER_PREFIXES:
             raise ConfigError(f"gather.prefixes must be in [1, {SR_MAX_GATHER_PREFIXES}]")
-        if not 1 <= s["gather.suffixes"] <= SR_MAX_GATHER_SUFFIXES:
+        if not 1 <= s.gather_suffixes <= SR_MAX_GATHER_SUFFIXES:
             raise ConfigError(f"gather.suffixes must be in [1, {SR_MAX_GATHER_SUFFIXES}]")
-        if s["gather.mis"] not in GATHER_MIS:
+        if s.gather_mis not in GATHER_MIS:
             raise ConfigError(f"gather.mis must be one of {', '.join(GATHER_MIS)}")
-        if s["gather.search"] not in SEARCHES:
+        if s.gather_search not in SEARCHES:
             raise ConfigError(f"gather.search must be one of {', '.join(SEARCHES)}")
-        if s["gather.radius_type"] not in ("raycone", "fixed"):
+        if s.gather_radius_type not in ("raycone", "fixed"):
             raise ConfigError("gather.radius_type must be raycone or fixed")
-        if not s["prefix.min_length"] >= 1:
+        if not s.prefix_min_length >= 1:
             raise ConfigError("prefix.min_length must be >= 1")
         for k in ("prefix.short_segment", "gather.radius"):
-            if not s[k] >= 0.0:
+            if not s.get(k) >= 0.0:
                 raise ConfigError(f"{k} must be >= 0")
 
     def kernels(self) -> tuple:
-        return (*self.KERNELS, *stage_kernels(self.settings["debug.mutation"]))
+        return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
 
     def allocate(self) -> None:
         s = self.settings
         self.allocate_path_reuse()
-        self.fallback_radius = resolve_spatial_radius(s["gather.fallback_radius"], self.SPATIAL_RADIUS_1080,
+        self.fallback_radius = resolve_spatial_radius(s.gather_fallback_radius, self.SPATIAL_RADIUS_1080,
                                                       self.height)
-        if s["gather.fallback_radius"] == "auto":
-            s["gather.fallback_radius"] = self.fallback_radius
+        if s.gather_fallback_radius == "auto":
+            s.gather_fallback_radius = self.fallback_radius
         # prefixes: the resampled ones (this frame's and the previous)
         self.prefixes = PingPong(self.buffer("prefixes", PrefixReservoir), self.buffer("prefixes_prev", PrefixReservoir))
         self.prefix_gbs = PingPong(allocate_gbuffer(self, "prefix_gbuffer"), allocate_gbuffer(self, "prefix_gbuffer_prev"))
         # the search structure: a box per pixel (centre and half-size; corners for the BVH)
         self.search = SearchStructure()
-        self.search.kind = int(SEARCHES[s["gather.search"]])
+        self.search.kind = int(SEARCHES[s.gather_search])
         self.search.halves = self.buffer("search.halves", float)
         if self.search.kind == SEARCHES["bvh"]:
             self.lowers = self.buffer("search.lowers", wp.vec3)
@@ -182,25 +194,25 @@ class SuffixReSTIR(PathReuseIntegrator):
 
     def params(self, frame: int, sample: int) -> SRParams:
         s = self.settings
-        pt = self.pt_params(frame, sample, float(s["rc.near_distance"]) * self.scene_radius, s["suffix.temporal.cap"])
+        pt = self.pt_params(frame, sample, float(s.rc_near_distance) * self.scene_radius, s.suffix_temporal_cap)
         p = SRParams()
         p.pt = pt
-        p.min_prefix = int(s["prefix.min_length"])
-        p.short_segment = float(s["prefix.short_segment"]) * self.scene_radius
-        p.prefix_cap = float(s["prefix.temporal.cap"])
-        p.suffix_cap = float(s["suffix.temporal.cap"])
-        p.gather_prefixes = int(s["gather.prefixes"])
-        p.gather_suffixes = int(s["gather.suffixes"])
-        p.gather_mis = int(GATHER_MIS[s["gather.mis"]])
-        p.gather_cap = float(s["gather.cap"])
-        p.box_scale = float(s["gather.radius"]) * self.spread_angle
+        p.min_prefix = int(s.prefix_min_length)
+        p.short_segment = float(s.prefix_short_segment) * self.scene_radius
+        p.prefix_cap = float(s.prefix_temporal_cap)
+        p.suffix_cap = float(s.suffix_temporal_cap)
+        p.gather_prefixes = int(s.gather_prefixes)
+        p.gather_suffixes = int(s.gather_suffixes)
+        p.gather_mis = int(GATHER_MIS[s.gather_mis])
+        p.gather_cap = float(s.gather_cap)
+        p.box_scale = float(s.gather_radius) * self.spread_angle
         p.box_half = 0.0
-        if s["gather.radius_type"] == "fixed":
-            p.box_half = float(s["gather.radius"]) * self.scene_radius / max(self.width, self.height)
-        p.adaptive = int(bool(s["prefix.adaptive"]))
-        p.avoid_specular_end = int(bool(s["prefix.avoid_specular_end"]))
-        p.avoid_short_end = int(bool(s["prefix.avoid_short_end"]))
-        p.canonical_each = int(bool(s["gather.canonical_per_prefix"]))
+        if s.gather_radius_type == "fixed":
+            p.box_half = float(s.gather_radius) * self.scene_radius / max(self.width, self.height)
+        p.adaptive = int(bool(s.prefix_adaptive))
+        p.avoid_specular_end = int(bool(s.prefix_avoid_specular_end))
+        p.avoid_short_end = int(bool(s.prefix_avoid_short_end))
+        p.canonical_each = int(bool(s.gather_canonical_per_prefix))
         p.fallback_radius = float(self.fallback_radius)
         return p
 
@@ -249,30 +261,30 @@ class SuffixReSTIR(PathReuseIntegrator):
 
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
-        suffix, gather = stage_kernels(self.settings["debug.mutation"])
+        suffix, gather = MUTATIONS.kernels(self.settings.debug_mutation)
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         history = self.prev_camera is not None
         # ---- prefixes: fresh, resampled with the previous frame's
-        temporal = int(bool(self.settings["prefix.temporal"] and history))
+        temporal = int(bool(self.settings.prefix_temporal and history))
         self.run_stage("prefix", prefix_kernel, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
                                                  gb.previous, self.prefixes.previous, self.prefix_gbs.previous],
                        [self.prefixes.current, self.prefix_gbs.current])
         self.build_search(p)
         # ---- suffixes at the resampled prefix ends: new, resampled with the previous frame's, then
         # spatial rounds (they write into the history's buffer, free once the suffix stage read it)
-        temporal = int(bool(self.settings["suffix.temporal"] and history))
+        temporal = int(bool(self.settings.suffix_temporal and history))
         self.run_stage("suffix", suffix, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
                                           gb.previous, self.prefixes.current, self.prefix_gbs.current,
                                           self.prefixes.previous, self.prefix_gbs.previous, res.previous],
                        [res.current, self.shift_events])
         self.count_shifts("suffix")
-        for rd in range(self.settings["suffix.spatial.rounds"]):
+        for rd in range(self.settings.suffix_spatial_rounds):
             p.pt.spatial_round = rd
             self.pass_out = res.previous
             self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
                             [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
-                            self.settings["debug.mutation"] == "spatial_in_place")
+                            self.settings.debug_mutation == "spatial_in_place")
             res.previous = self.pass_out
         # ---- the final gather
         self.run_stage("gather", gather,

@@ -12,20 +12,18 @@ Prefix numbers are rng_uniform(seed, bounce_dim(k, slot)) at bounce k, as a ReST
 """
 import warp as wp
 
+from ...device.bounce import found_along, nee_at, scatter_at, segment
 from ...device.bsdf import Material, bsdf_has_rough_component, bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, trace_closest, visible_to_light
-from ...device.path_steps import connect_to_light, emission_mis_weight, scatter
-from ...device.rng import rng_uniform, rng_uniform2
+from ...device.path_steps import emission_mis_weight
 from ...device.sampling import frame_from_normal, to_local
 from ...device.scene_device import SceneDevice, material_at
-from ...device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
-from ..path_reuse.base_path import bounce_dim, found_along
 from ..path_reuse.path_sample import lobe_code, lobe_from_code
-from ..path_reuse.rc_criteria import eval_lobe, lobe_weight, segment
+from ..path_reuse.rc_criteria import eval_lobe, lobe_weight
 from .params import SRParams
 
 
@@ -74,12 +72,10 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
     k = int(0)
     while k + 2 <= params.pt.max_depth:
         if k >= params.pt.first_event and bsdf_is_delta_only(mat) == 0:
-            c = connect_to_light(scene, hit, mat, frame, wi, rng_uniform(seed, bounce_dim(k, DIM_LIGHT_SELECT)),
-                                 rng_uniform2(seed, bounce_dim(k, DIM_LIGHT_POINT)), 1, STRATEGY_MIS)
+            c = nee_at(scene, hit, mat, frame, wi, seed, wp.uint32(0), k, 1, STRATEGY_MIS)
             out.rays += c.rays
             out.internal += wp.cw_mul(beta, c.L)
-        sc = scatter(hit, mat, frame, wi, rng_uniform(seed, bounce_dim(k, DIM_BSDF_LOBE)),
-                     rng_uniform2(seed, bounce_dim(k, DIM_BSDF_DIR)))
+        sc = scatter_at(hit, mat, frame, wi, seed, wp.uint32(0), k)
         if sc.valid == 0:
             break
         rough = lobe_is_rough(mat, sc.bs.lobe, params.pt.rough_threshold)
@@ -209,8 +205,7 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
     footprint = dst.hit.t
     k = int(0)
     while k < P - 1:
-        sc = scatter(hit, mat, frame, wi, rng_uniform(r.seed, bounce_dim(k, DIM_BSDF_LOBE)),
-                     rng_uniform2(r.seed, bounce_dim(k, DIM_BSDF_DIR)))
+        sc = scatter_at(hit, mat, frame, wi, r.seed, wp.uint32(0), k)
         if sc.valid == 0:
             return res
         beta = wp.cw_mul(beta, lobe_weight(mat, wi, sc.bs))

@@ -1,0 +1,129 @@
+"""Typed method settings: a dataclass per method, one field per setting with its `--set` key, its
+default, its one-line meaning (`restir info`) and whether it is static (it selects which kernels
+are built: a change compiles other code) or runtime (a value the kernels read).
+
+    @dataclasses.dataclass
+    class MySettings(Settings):
+        candidates: int = setting("candidates", 4, "light candidates per pixel")
+        mutation: str = setting("debug.mutation", "none", "fault injection (biased)", static=True)
+
+A method names its class (`Integrator.Settings`); the integrator reads `self.settings.candidates`.
+Every settings object also holds the render's own settings (seed, spp, max_depth, camera motion,
+the scene's Russian-roulette depth and hide_emitters), filled by the API from the RenderConfig
+and the scene, never by `--set`. A component's settings nest under a prefix (`di.*`:
+`component(...)`), so `--set di.candidates=8` reaches `settings.di.candidates`.
+"""
+import dataclasses
+
+from .config import ConfigError, parse_value
+
+MUTATION_DOC = "fault injection for the mutation tests (biased; the harness refuses it)"  # debug.mutation
+
+
+def setting(key: str, default, doc: str, *, static: bool = False):
+    """A method setting: its `--set` key, default, one-line meaning, and static (selects kernels)
+    or runtime (a kernel parameter)."""
+    return dataclasses.field(default=default, metadata={"key": key, "doc": doc, "static": static})
+
+
+def component(prefix: str, factory, doc_prefix: str, exclude: tuple = ()):
+    """A component's settings (a Settings dataclass made by `factory`) under `prefix` ("di."),
+    its keys' meanings prefixed by `doc_prefix`, without the keys in `exclude`."""
+    return dataclasses.field(default_factory=factory, metadata={"prefix": prefix, "doc_prefix": doc_prefix,
+                                                                "exclude": exclude})
+
+
+def _render(default):
+    return dataclasses.field(default=default, metadata={"render": True})
+
+
+@dataclasses.dataclass
+class Settings:
+    """The render's settings every method has (from the RenderConfig and the scene; not `--set`)."""
+    seed: int = _render(0)
+    spp: int = _render(1)
+    max_depth: int = _render(5)
+    camera_motion: str = _render("none")
+    camera_speed: float = _render(1.0)
+    rr_depth: int = _render(5)
+    hide_emitters: bool = _render(False)
+
+    # ------------------------------------------------------------------ the table of keys
+    @classmethod
+    def entries(cls) -> list:
+        """(key, path of attribute names, default, doc, static) of every `--set` setting, a
+        component's under its prefix."""
+        out = []
+        for f in dataclasses.fields(cls):
+            if "key" in f.metadata:
+                out.append((f.metadata["key"], (f.name,), f.default, f.metadata["doc"], f.metadata["static"]))
+            elif "prefix" in f.metadata:
+                inner = f.default_factory()
+                for key, path, _, doc, static in type(inner).entries():
+                    if key not in f.metadata["exclude"]:
+                        default = _get(inner, path)
+                        out.append((f.metadata["prefix"] + key, (f.name, *path), default,
+                                    f.metadata["doc_prefix"] + doc, static))
+        return out
+
+    @classmethod
+    def defaults(cls) -> dict:
+        """{key: default} (what `restir info` lists)."""
+        return {key: default for key, _, default, _, _ in cls.entries()}
+
+    @classmethod
+    def docs(cls) -> dict:
+        return {key: doc for key, _, _, doc, _ in cls.entries()}
+
+    @classmethod
+    def static_keys(cls) -> tuple:
+        return tuple(key for key, _, _, _, static in cls.entries() if static)
+
+    # ------------------------------------------------------------------ building and reading
+    @classmethod
+    def from_overrides(cls, overrides: dict, **render):
+        """The defaults with `overrides` ({key: value}; strings parsed by the default's type) and
+        the render's settings; an unknown key or a bad value is a ConfigError."""
+        paths = {key: (path, default) for key, path, default, _, _ in cls.entries()}
+        out = cls(**render)
+        for key, value in overrides.items():
+            if key not in paths:
+                raise ConfigError(f"unknown setting '{key}' (known: {', '.join(sorted(paths)) or 'none'})")
+            path, default = paths[key]
+            _set(out, path, parse_value(value, default) if isinstance(value, str) else value)
+        return out
+
+    def as_dict(self) -> dict:
+        """{key: value} of every `--set` setting, then the render's (the stats' "settings")."""
+        out = {key: _get(self, path) for key, path, _, _, _ in self.entries()}
+        out.update({f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)})
+        return out
+
+    def get(self, key: str):
+        """A setting by its key (for code generic over methods, such as the spatial-reuse keys)."""
+        return _get(self, self._path(key))
+
+    def set(self, key: str, value) -> None:
+        _set(self, self._path(key), value)
+
+    @classmethod
+    def _path(cls, key: str) -> tuple:
+        for k, path, _, _, _ in cls.entries():
+            if k == key:
+                return path
+        raise KeyError(key)
+
+    def render_settings(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)}
+
+
+def _get(obj, path):
+    for name in path:
+        obj = getattr(obj, name)
+    return obj
+
+
+def _set(obj, path, value) -> None:
+    for name in path[:-1]:
+        obj = getattr(obj, name)
+    setattr(obj, path[-1], value)

@@ -1,0 +1,67 @@
+"""Typed method settings (restir/settings.py) as every method declares them: keys, defaults and
+meanings in one place, `--set` strings parsed by the default's type, unknown keys refused, a
+component's keys (di.*) reaching its nested settings, and the table `restir info` prints."""
+import dataclasses
+
+import pytest
+
+from restir.config import ConfigError
+from restir.integrators import METHODS
+
+
+@pytest.mark.parametrize("name", list(METHODS))
+def test_every_setting_has_a_key_default_and_meaning(name):
+    cls = METHODS[name]
+    assert list(cls.SETTINGS) == list(cls.Settings.defaults()) and set(cls.SETTINGS_DOC) == set(cls.SETTINGS)
+    assert all(doc.strip() for doc in cls.SETTINGS_DOC.values())
+    s = cls.Settings()
+    for key, default in cls.SETTINGS.items():
+        assert s.get(key) == default
+    # the stats' table: every --set key with its value, then the render's settings
+    assert list(s.as_dict())[:len(cls.SETTINGS)] == list(cls.SETTINGS)
+    assert "debug.mutation" in cls.Settings.static_keys() or name == "pt"
+
+
+def test_overrides_are_parsed_and_checked():
+    S = METHODS["restir-pt"].Settings
+    s = S.from_overrides({"candidates": "4", "temporal": "off", "temporal.cap": "2.5", "di.candidates": "3",
+                          "di.visibility": "shading"}, seed=7, spp=2)
+    assert (s.candidates, s.temporal, s.temporal_cap, s.seed, s.spp) == (4, False, 2.5, 7, 2)
+    assert (s.di.candidates, s.di.visibility, s.di.spatial_rounds) == (3, "shading", 1)  # the path methods' DI default
+    assert S().di.candidates == 8 and S().di is not S().di  # each settings object owns its component
+    with pytest.raises(ConfigError, match="unknown setting 'di.debug.mutation'"):
+        S.from_overrides({"di.debug.mutation": "drop_empty_neighbors"})
+    with pytest.raises(ConfigError, match="unknown setting 'spatial.round'"):
+        S.from_overrides({"spatial.round": "2"})
+    with pytest.raises(ConfigError, match="is not an int"):
+        S.from_overrides({"candidates": "four"})
+
+
+def test_the_api_gives_the_integrator_typed_settings():
+    import restir
+    from restir.api import make_integrator
+
+    integ = make_integrator(restir.load_scene("builtin:cornell-box", width=8, height=8),
+                            restir.RenderConfig(method="restir-di", spp=1, seed=3, settings={"candidates": "2"}))
+    assert isinstance(integ.settings, METHODS["restir-di"].Settings)
+    assert (integ.settings.candidates, integ.settings.seed, integ.settings.max_depth) == (2, 3, 2)
+    assert dataclasses.is_dataclass(integ.settings)
+
+
+@pytest.mark.parametrize("name", [n for n in METHODS if n != "pt"])
+def test_one_mutation_registry_per_method(name):
+    """Every method's fault injections in one registry (common/mutations.py): each kernel build
+    returns the method's stage kernels in the shipped order with at least one of them changed;
+    the pipeline mutations run the shipped kernels; debug.mutation accepts exactly its names."""
+    from restir.integrators.common.mutations import Mutations
+
+    reg = METHODS[name].MUTATIONS
+    assert isinstance(reg, Mutations) and "none" in reg
+    for m in reg:
+        kernels = reg.kernels(m)
+        assert len(kernels) == len(reg.shipped)
+        changed = [a is not b for a, b in zip(kernels, reg.shipped)]
+        assert any(changed) == (reg.builds[m] is not None), m
+        assert reg.kernels(m) is kernels  # built once
+    with pytest.raises(ConfigError, match="debug.mutation must be one of"):
+        METHODS[name].check_settings(METHODS[name].Settings.from_overrides({"debug.mutation": "no_such_defect"}))
