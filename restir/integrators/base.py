@@ -22,6 +22,7 @@ from ..parallel import launch_pixels
 from ..settings import Settings
 from ..timing import BufferRegistry, StageTimer
 from .common.events import COUNTER_NAMES, EV_RAYS
+from .common.mutations import Mutations
 from .common.tally import EventTally, tally_kernel
 
 
@@ -39,7 +40,7 @@ class Integrator:
     SETTINGS: dict = {}     # --set KEY=VALUE defaults, from Settings (made for each subclass)
     SETTINGS_DOC: dict = {}  # one line per setting, from Settings
     FIXED_MAX_DEPTH: int | None = None  # the only max_depth the method computes, or None: any
-    MUTATIONS: tuple = ("none",)  # fault injections of debug.mutation (TESTING.md 5.11)
+    MUTATIONS = Mutations((), {})  # fault injections of debug.mutation (common/mutations.py): none
     stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
