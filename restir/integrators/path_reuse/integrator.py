@@ -1,10 +1,13 @@
 """What the path-reuse methods (ReSTIR PT, Suffix ReSTIR) share besides their stages: the checks
 of the settings they have in common, the primary-hit layer with ReSTIR DI on it, the frame's
 ReSTIR PT parameters, the ping-pong pass that counts its shifts, and the shift stats."""
+import dataclasses
+
 import numpy as np
 import warp as wp
 
 from ...device.streams import MAX_SPATIAL_ROUNDS, PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
+from ...settings import Settings, setting
 from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
 from ..common.gbuffer import PingPong, allocate_gbuffer
@@ -28,6 +31,20 @@ def summarize_shifts(shift_counts: dict) -> tuple[dict, list]:
         if c[0] + c[2] > 0 and c[1] + c[3] == 0:
             dead.append(stage)
     return shifts, dead
+
+
+@dataclasses.dataclass
+class PathReuseSettings(Settings):
+    """The settings every path-reuse method starts with (its own follow, then rc.*, the fault
+    injection and the di.* component)."""
+    shift: str = setting("shift", "hybrid", "hybrid: replay to the first vertex that qualifies, then reconnect; "
+                         "reconnection: at the first vertex after the path's start (ReSTIR PT: x2; Suffix ReSTIR: "
+                         "after the prefix end); replay: the whole path")
+    direct: str = setting("direct", "restir-di", "restir-di: direct light at the primary hit from ReSTIR DI (the "
+                          "di.* settings); pt: the method's paths own every event")
+    candidates: int = setting("candidates", 1, "paths traced per pixel from its start, streaming RIS over their "
+                              "events, M = 1 each (ReSTIR PT: base paths at the primary hit; Suffix ReSTIR: "
+                              "suffixes at the resampled prefix end)")
 
 
 class PathReuseIntegrator(Integrator):

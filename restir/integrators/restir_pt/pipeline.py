@@ -8,11 +8,11 @@ import functools
 
 import numpy as np
 
-from ...settings import MUTATION_DOC, Settings, setting
+from ...settings import MUTATION_DOC, setting
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..path_reuse.direct_light import DISettings, di_component
-from ..path_reuse.integrator import PathReuseIntegrator
+from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
 from ..path_reuse.shift import make_shift
@@ -42,13 +42,7 @@ MUTATIONS = Mutations((initial_kernel, temporal_kernel, spatial_kernel), {
 # The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image; the
 # temporal cap of 20 was also the best of 1-50 and none by measurement (BENCHMARKS.md).
 @dataclasses.dataclass
-class PTSettings(Settings):
-    shift: str = setting("shift", "hybrid", "hybrid: replay to the first vertex that qualifies, then reconnect; "
-                         "reconnection: always at x2; replay: the whole path")
-    direct: str = setting("direct", "restir-di", "restir-di: direct light at the primary hit from ReSTIR DI (the "
-                          "di.* settings); pt: ReSTIR PT resamples every path")
-    candidates: int = setting("candidates", 1, "base paths per pixel (streaming RIS over their events; M = 1 per "
-                              "path)")
+class PTSettings(PathReuseSettings):
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
     temporal_cap: float = setting("temporal.cap", 20.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x)")

@@ -12,13 +12,13 @@ import numpy as np
 import warp as wp
 
 from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
-from ...settings import MUTATION_DOC, Settings, setting
+from ...settings import MUTATION_DOC, setting
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
 from ..path_reuse.direct_light import DISettings, di_component
-from ..path_reuse.integrator import PathReuseIntegrator
+from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from .params import GATHER_MIS, SRParams
 from .prefix import PrefixReservoir
 from .s1_prefix import prefix_kernel
@@ -46,13 +46,7 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
 
 # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
 @dataclasses.dataclass
-class SuffixSettings(Settings):
-    shift: str = setting("shift", "hybrid", "the suffix shift: hybrid (replay to the first vertex that qualifies, "
-                         "then reconnect), reconnection (at the vertex after the prefix end), replay")
-    direct: str = setting("direct", "restir-di", "restir-di: direct light at the primary hit from ReSTIR DI (the "
-                          "di.* settings); pt: prefixes and suffixes own every event")
-    candidates: int = setting("candidates", 1, "suffixes traced per pixel at its resampled prefix end (streaming "
-                              "RIS; M = 1 each)")
+class SuffixSettings(PathReuseSettings):
     rc_near_distance: float = setting("rc.near_distance", 0.03, "hybrid: shortest suffix reconnection segment, x "
                                       "the scene's smallest extent")
     rc_roughness: float = setting("rc.roughness", 0.2, "glossy lobes with a linear roughness above this are rough "
