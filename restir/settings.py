@@ -14,6 +14,7 @@ and the scene, never by `--set`. A component's settings nest under a prefix (`di
 `component(...)`), so `--set di.candidates=8` reaches `settings.di.candidates`.
 """
 import dataclasses
+import functools
 
 from .config import ConfigError, parse_value
 
@@ -33,24 +34,21 @@ def component(prefix: str, factory, doc_prefix: str, exclude: tuple = ()):
                                                                 "exclude": exclude})
 
 
-def _render(default):
-    return dataclasses.field(default=default, metadata={"render": True})
-
-
 @dataclasses.dataclass
 class Settings:
     """The render's settings every method has (from the RenderConfig and the scene; not `--set`)."""
-    seed: int = _render(0)
-    spp: int = _render(1)
-    max_depth: int = _render(5)
-    camera_motion: str = _render("none")
-    camera_speed: float = _render(1.0)
-    rr_depth: int = _render(5)
-    hide_emitters: bool = _render(False)
+    seed: int = 0
+    spp: int = 1
+    max_depth: int = 5
+    camera_motion: str = "none"
+    camera_speed: float = 1.0
+    rr_depth: int = 5
+    hide_emitters: bool = False
 
     # ------------------------------------------------------------------ the table of keys
     @classmethod
-    def entries(cls) -> list:
+    @functools.cache  # per class: read on every sample by code generic over methods (`get`)
+    def entries(cls) -> tuple:
         """(key, path of attribute names, default, doc, static) of every `--set` setting, a
         component's under its prefix."""
         out = []
@@ -64,7 +62,7 @@ class Settings:
                         default = _get(inner, path)
                         out.append((f.metadata["prefix"] + key, (f.name, *path), default,
                                     f.metadata["doc_prefix"] + doc, static))
-        return out
+        return tuple(out)
 
     @classmethod
     def defaults(cls) -> dict:
@@ -95,9 +93,7 @@ class Settings:
 
     def as_dict(self) -> dict:
         """{key: value} of every `--set` setting, then the render's (the stats' "settings")."""
-        out = {key: _get(self, path) for key, path, _, _, _ in self.entries()}
-        out.update({f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)})
-        return out
+        return {**{key: _get(self, path) for key, path, _, _, _ in self.entries()}, **self.render_settings()}
 
     def get(self, key: str):
         """A setting by its key (for code generic over methods, such as the spatial-reuse keys)."""
@@ -108,10 +104,10 @@ class Settings:
 
     @classmethod
     def _path(cls, key: str) -> tuple:
-        for k, path, _, _, _ in cls.entries():
-            if k == key:
-                return path
-        raise KeyError(key)
+        path = next((path for k, path, _, _, _ in cls.entries() if k == key), None)
+        if path is None:
+            raise KeyError(key)
+        return path
 
     def render_settings(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)}

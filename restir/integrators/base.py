@@ -110,8 +110,8 @@ class Integrator:
     def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights",
                   new_call: bool = True) -> None:
         """Launch one stage over the pixels, timed. Every stage kernel takes `events` (one vec4i per
-        pixel, common/events.py) as its last output; they are summed into the counters here,
-        non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
+        pixel, common/events.py) as its last output; they are summed on the device (the tally,
+        read into the counters once per frame), non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
         stages that write radiance). new_call=False: a further part of the same run of the stage
         (its time adds to that run's)."""
         key = self.stage_prefix + stage
