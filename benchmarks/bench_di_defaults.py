@@ -154,9 +154,9 @@ def describe(s, res):
     rad = s.get("spatial.radius", "auto")
     if rad == "auto":
         from restir.integrators.common.reuse_domains import spatial_radius_for
-        from restir.integrators.restir_di.pipeline import ReSTIRDI
+        from restir.integrators.restir_di.pipeline import DISettings
 
-        rad = spatial_radius_for(ReSTIRDI.SPATIAL_RADIUS_1080, res)
+        rad = spatial_radius_for(DISettings().spatial.radius_at_1080, res)
     parts = []
     parts.append(f"T cap {s.get('temporal.cap', 5.0):g}" if t else "T off")
     if rounds:

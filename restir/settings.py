@@ -27,23 +27,19 @@ def setting(key: str, default, doc: str, *, static: bool = False):
     return dataclasses.field(default=default, metadata={"key": key, "doc": doc, "static": static})
 
 
-def component(prefix: str, factory, doc_prefix: str, exclude: tuple = ()):
-    """A component's settings (a Settings dataclass made by `factory`) under `prefix` ("di."),
-    its keys' meanings prefixed by `doc_prefix`, without the keys in `exclude`."""
+def component(prefix: str, factory, doc_prefix: str = "", exclude: tuple = (), doc_args: dict | None = None):
+    """A component's settings (a SettingsGroup dataclass made by `factory`) under `prefix` ("di."),
+    its keys' meanings prefixed by `doc_prefix` (and formatted with `doc_args` where given: the
+    "{radius_at_1080}" of the spatial-reuse settings), without the keys in `exclude`."""
     return dataclasses.field(default_factory=factory, metadata={"prefix": prefix, "doc_prefix": doc_prefix,
-                                                                "exclude": exclude})
+                                                                "exclude": exclude, "doc_args": doc_args})
 
 
 @dataclasses.dataclass
-class Settings:
-    """The render's settings every method has (from the RenderConfig and the scene; not `--set`)."""
-    seed: int = 0
-    spp: int = 1
-    max_depth: int = 5
-    camera_motion: str = "none"
-    camera_speed: float = 1.0
-    rr_depth: int = 5
-    hide_emitters: bool = False
+class SettingsGroup:
+    """A group of `--set` settings: the key table and reading or writing a setting by its key.
+    A method's settings are a `Settings`; a part shared by methods (the spatial-reuse settings)
+    is a group nested with `component`."""
 
     # ------------------------------------------------------------------ the table of keys
     @classmethod
@@ -57,11 +53,12 @@ class Settings:
                 out.append((f.metadata["key"], (f.name,), f.default, f.metadata["doc"], f.metadata["static"]))
             elif "prefix" in f.metadata:
                 inner = f.default_factory()
+                args = f.metadata["doc_args"]
                 for key, path, _, doc, static in type(inner).entries():
                     if key not in f.metadata["exclude"]:
                         default = _get(inner, path)
                         out.append((f.metadata["prefix"] + key, (f.name, *path), default,
-                                    f.metadata["doc_prefix"] + doc, static))
+                                    f.metadata["doc_prefix"] + (doc.format(**args) if args else doc), static))
         return tuple(out)
 
     @classmethod
@@ -76,6 +73,33 @@ class Settings:
     @classmethod
     def static_keys(cls) -> tuple:
         return tuple(key for key, _, _, _, static in cls.entries() if static)
+
+    def get(self, key: str):
+        """A setting by its key (for code generic over methods)."""
+        return _get(self, self._path(key))
+
+    def set(self, key: str, value) -> None:
+        _set(self, self._path(key), value)
+
+    @classmethod
+    def _path(cls, key: str) -> tuple:
+        path = next((path for k, path, _, _, _ in cls.entries() if k == key), None)
+        if path is None:
+            raise KeyError(key)
+        return path
+
+
+@dataclasses.dataclass
+class Settings(SettingsGroup):
+    """A method's settings: its `--set` groups and the render's settings every method has (from
+    the RenderConfig and the scene; not `--set`)."""
+    seed: int = 0
+    spp: int = 1
+    max_depth: int = 5
+    camera_motion: str = "none"
+    camera_speed: float = 1.0
+    rr_depth: int = 5
+    hide_emitters: bool = False
 
     # ------------------------------------------------------------------ building and reading
     @classmethod
@@ -94,20 +118,6 @@ class Settings:
     def as_dict(self) -> dict:
         """{key: value} of every `--set` setting, then the render's (the stats' "settings")."""
         return {**{key: _get(self, path) for key, path, _, _, _ in self.entries()}, **self.render_settings()}
-
-    def get(self, key: str):
-        """A setting by its key (for code generic over methods, such as the spatial-reuse keys)."""
-        return _get(self, self._path(key))
-
-    def set(self, key: str, value) -> None:
-        _set(self, self._path(key), value)
-
-    @classmethod
-    def _path(cls, key: str) -> tuple:
-        path = next((path for k, path, _, _, _ in cls.entries() if k == key), None)
-        if path is None:
-            raise KeyError(key)
-        return path
 
     def render_settings(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)}

@@ -222,7 +222,7 @@ def test_confidence_stays_bounded_where_the_material_has_no_smooth_lobe():
         integ.render_frame(f)
     M = integ.reservoirs.previous.numpy()["M"]
     s = integ.settings
-    assert M.max() <= (1 + s.temporal_cap) * (1 + s.spatial_neighbors) ** s.spatial_rounds, M.max()
+    assert M.max() <= (1 + s.temporal_cap) * (1 + s.spatial.neighbors) ** s.spatial.rounds, M.max()
     assert integ.counters["nonfinite_weights"] == 0
 
 

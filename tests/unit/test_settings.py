@@ -27,7 +27,7 @@ def test_overrides_are_parsed_and_checked():
     s = S.from_overrides({"candidates": "4", "temporal": "off", "temporal.cap": "2.5", "di.candidates": "3",
                           "di.visibility": "shading"}, seed=7, spp=2)
     assert (s.candidates, s.temporal, s.temporal_cap, s.seed, s.spp) == (4, False, 2.5, 7, 2)
-    assert (s.di.candidates, s.di.visibility, s.di.spatial_rounds) == (3, "shading", 1)  # the path methods' DI default
+    assert (s.di.candidates, s.di.visibility, s.di.spatial.rounds) == (3, "shading", 1)  # the path methods' DI default
     assert S().di.candidates == 8 and S().di is not S().di  # each settings object owns its component
     with pytest.raises(ConfigError, match="unknown setting 'di.debug.mutation'"):
         S.from_overrides({"di.debug.mutation": "drop_empty_neighbors"})

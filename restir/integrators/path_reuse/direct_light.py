@@ -11,6 +11,7 @@ ReSTIR PT"), 8 candidates and 1 round leave ReSTIR PT's error unchanged (within 
 frame 17-33% cheaper: the direct light's share of the error is small beside the indirect paths'
 and the one camera sample's.
 """
+import copy
 import dataclasses
 
 from ...settings import component
@@ -20,14 +21,20 @@ from ..restir_di.pipeline import DISettings, ReSTIRDI
 def di_component():
     """The `di.*` settings field of a path-reuse method's settings: ReSTIR DI's, with the lighter
     defaults above (8 candidates, 1 spatial round), without its fault injection."""
-    return component("di.", lambda: DISettings(candidates=8, spatial_rounds=1), "ReSTIR DI's ",
-                     exclude=("debug.mutation",))
+    return component("di.", _path_method_di_defaults, "ReSTIR DI's ", exclude=("debug.mutation",))
+
+
+def _path_method_di_defaults() -> DISettings:
+    s = DISettings(candidates=8)
+    s.spatial.rounds = 1
+    return s
 
 
 def di_settings(settings) -> DISettings:
     """ReSTIR DI's settings from a path method's: its di.* settings and the shared render settings."""
     render = {**settings.render_settings(), "max_depth": 2}
-    return dataclasses.replace(settings.di, **render, debug_mutation="none")
+    # a copy, nested groups included: ReSTIR DI writes its resolved radius into its own settings
+    return dataclasses.replace(copy.deepcopy(settings.di), **render, debug_mutation="none")
 
 
 def check_di_settings(settings: dict) -> None:

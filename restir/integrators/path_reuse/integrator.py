@@ -6,12 +6,11 @@ import dataclasses
 import numpy as np
 import warp as wp
 
-from ...device.streams import MAX_SPATIAL_ROUNDS, PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
+from ...device.streams import PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
 from ...settings import Settings, setting
 from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
 from ..common.gbuffer import PingPong, allocate_gbuffer
-from ..common.reuse_domains import resolve_spatial_radius
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
 
@@ -48,12 +47,11 @@ class PathReuseSettings(Settings):
 
 
 class PathReuseIntegrator(Integrator):
-    """Base of ReSTIR PT and Suffix ReSTIR. A subclass names its spatial settings (SPATIAL_KEYS:
-    rounds, neighbours, radius), its 1080-line radius and its MUTATIONS."""
+    """Base of ReSTIR PT and Suffix ReSTIR. A subclass names its spatial-reuse settings (SPATIAL:
+    the attribute holding its SpatialReuseSettings) and its MUTATIONS."""
 
-    SPATIAL_KEYS = ("spatial.rounds", "spatial.neighbors", "spatial.radius")
+    SPATIAL = "spatial"
     PASS_BUFFER = True  # a third path-reservoir buffer for the reuse passes' output (ping-pong)
-    SPATIAL_RADIUS_1080 = 20.0
 
     @classmethod
     def check_path_settings(cls, settings) -> None:
@@ -62,16 +60,13 @@ class PathReuseIntegrator(Integrator):
         from ...config import ConfigError
 
         s = settings
-        rounds, neighbors, radius = cls.SPATIAL_KEYS
         if s.shift not in SHIFTS:
             raise ConfigError(f"shift must be one of {', '.join(SHIFTS)}")
         if s.direct not in ("restir-di", "pt"):
             raise ConfigError("direct must be restir-di or pt")
         if not 1 <= s.candidates <= PT_MAX_CANDIDATES:
             raise ConfigError(f"candidates must be in [1, {PT_MAX_CANDIDATES}]")
-        if not 0 <= s.get(rounds) <= MAX_SPATIAL_ROUNDS or not 1 <= s.get(neighbors) <= PT_MAX_NEIGHBORS:
-            raise ConfigError(f"{rounds} must be in [0, {MAX_SPATIAL_ROUNDS}] and {neighbors} in [1, {PT_MAX_NEIGHBORS}]")
-        resolve_spatial_radius(s.get(radius), cls.SPATIAL_RADIUS_1080, 1)
+        getattr(s, cls.SPATIAL).check(PT_MAX_NEIGHBORS)
         if not s.rc_near_distance >= 0.0 or not s.rc_roughness >= 0.0:
             raise ConfigError("rc.near_distance and rc.roughness must be >= 0")
         if s.debug_mutation not in cls.MUTATIONS:
@@ -90,10 +85,7 @@ class PathReuseIntegrator(Integrator):
         if s.max_depth < 0:
             s.max_depth = PT_MAX_DEPTH
             self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_MAX_DEPTH}")
-        radius_key = self.SPATIAL_KEYS[2]
-        self.spatial_radius = resolve_spatial_radius(s.get(radius_key), self.SPATIAL_RADIUS_1080, self.height)
-        if s.get(radius_key) == "auto":
-            s.set(radius_key, self.spatial_radius)  # the stats report the pixels used
+        self.spatial_radius = getattr(s, self.SPATIAL).resolve_radius(self.height)
         self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
         self.primary_weight = self.buffer("primary_weight", float)
         self.emission = self.buffer("emission", wp.vec3)
@@ -127,7 +119,7 @@ class PathReuseIntegrator(Integrator):
         p.rough_threshold = float(s.rc_roughness)
         p.temporal_cap = float(temporal_cap)
         p.spatial_round = 0
-        p.spatial_k = int(s.get(self.SPATIAL_KEYS[1]))
+        p.spatial_k = int(getattr(s, self.SPATIAL).neighbors)
         p.spatial_radius = float(self.spatial_radius)
         return p
 

@@ -7,13 +7,13 @@ import dataclasses
 
 import warp as wp
 
-from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS, MAX_SPATIAL_ROUNDS
+from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS
 from ...settings import MUTATION_DOC, Settings, setting
 from ..base import Integrator
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
-from ..common.reuse_domains import resolve_spatial_radius
+from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from .params import DIParams
 from .reservoir import DIReservoir
 from .s1_initial import initial_kernel
@@ -49,10 +49,7 @@ class DISettings(Settings):
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs")
     temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one "
                                   "(<= 0: no cap, i.e. 1e6 x)")
-    spatial_rounds: int = setting("spatial.rounds", 2, "spatial reuse rounds")
-    spatial_neighbors: int = setting("spatial.neighbors", 3, "neighbours per round (pairwise MIS)")
-    spatial_radius: str = setting("spatial.radius", "auto", "neighbour disk radius in pixels; auto: 15 px at 1080 "
-                                  "lines scaled with the height, >= 2")
+    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=15.0, rounds=2)
     debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
 
 
@@ -62,7 +59,6 @@ class ReSTIRDI(Integrator):
     KERNELS = (primary_hits_kernel, initial_kernel, visibility_kernel, temporal_kernel, spatial_kernel, shade_kernel)
     Settings = DISettings
     DESCRIPTION = "ReSTIR DI (direct light, max_depth 2): initial RIS, visibility, temporal and spatial reuse"
-    SPATIAL_RADIUS_1080 = 15.0  # "auto" radius in pixels at 1080 lines (integrators/common/reuse_domains.py)
     VISIBILITY = ("reuse", "shading")
     MUTATIONS = MUTATIONS
     FIXED_MAX_DEPTH = 2  # direct illumination: emission plus one bounce, Mitsuba's meaning
@@ -83,17 +79,13 @@ class ReSTIRDI(Integrator):
                               f"and at most {DI_MAX_CANDIDATES} together")
         if settings.visibility not in ReSTIRDI.VISIBILITY:
             raise ConfigError(f"visibility must be one of {', '.join(ReSTIRDI.VISIBILITY)}")
-        reuse = settings.temporal or settings.spatial_rounds > 0
+        reuse = settings.temporal or settings.spatial.rounds > 0
         if settings.candidates_bsdf > 0 and settings.visibility == "shading" and reuse and \
                 settings.debug_mutation != "bsdf_unshadowed_reuse":
             # p_B omits V, so W is valid only for visibility-aware targets once samples are reused
             raise ConfigError("candidates.bsdf > 0 with reuse needs visibility=reuse "
                               "(unshadowed reuse of BSDF candidates is biased; see docs/restir_di.md)")
-        if not 0 <= settings.spatial_rounds <= MAX_SPATIAL_ROUNDS or \
-                not 1 <= settings.spatial_neighbors <= DI_MAX_NEIGHBORS:
-            raise ConfigError(f"spatial.rounds must be in [0, {MAX_SPATIAL_ROUNDS}] and spatial.neighbors in "
-                              f"[1, {DI_MAX_NEIGHBORS}]")
-        resolve_spatial_radius(settings.spatial_radius, ReSTIRDI.SPATIAL_RADIUS_1080, 1)  # raises if invalid
+        settings.spatial.check(DI_MAX_NEIGHBORS)
         if settings.debug_mutation not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
 
@@ -101,10 +93,7 @@ class ReSTIRDI(Integrator):
         return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
 
     def allocate(self) -> None:
-        self.spatial_radius = resolve_spatial_radius(self.settings.spatial_radius, self.SPATIAL_RADIUS_1080,
-                                                     self.height)
-        if self.settings.spatial_radius == "auto":
-            self.settings.spatial_radius = self.spatial_radius  # the stats report the pixels used
+        self.spatial_radius = self.settings.spatial.resolve_radius(self.height)
         if self.primary is None:
             # this sample's primary hits and the previous sample's (the temporal technique's domain)
             self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
@@ -129,7 +118,7 @@ class ReSTIRDI(Integrator):
         p.hide_emitters = int(bool(self.settings.hide_emitters))
         p.temporal_cap = float(self.settings.temporal_cap)
         p.spatial_round = 0
-        p.spatial_k = int(self.settings.spatial_neighbors)
+        p.spatial_k = int(self.settings.spatial.neighbors)
         p.spatial_radius = float(self.spatial_radius)
         return p
 
@@ -152,7 +141,7 @@ class ReSTIRDI(Integrator):
             self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
         if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
-        for rd in range(self.settings.spatial_rounds):
+        for rd in range(self.settings.spatial.rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place=in_place)
         self.run_stage("shade", shade_kernel, [sc, p, gb.current, self.primary_weight, self.emission,

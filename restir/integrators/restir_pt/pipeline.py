@@ -11,6 +11,7 @@ import numpy as np
 from ...settings import MUTATION_DOC, setting
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
+from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from ..path_reuse.direct_light import DISettings, di_component
 from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from ..path_reuse.params import PathReuseParams
@@ -46,10 +47,7 @@ class PTSettings(PathReuseSettings):
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
     temporal_cap: float = setting("temporal.cap", 20.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x)")
-    spatial_rounds: int = setting("spatial.rounds", 1, "spatial reuse rounds (pairwise MIS)")
-    spatial_neighbors: int = setting("spatial.neighbors", 3, "neighbours per round")
-    spatial_radius: str = setting("spatial.radius", "auto", "neighbour disk radius in pixels; auto: 20 px at 1080 "
-                                  "lines scaled with the height, >= 2")
+    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0)
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
                                   "are rough")
@@ -64,7 +62,6 @@ class ReSTIRPT(PathReuseIntegrator):
     KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
     Settings = PTSettings
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
-    SPATIAL_RADIUS_1080 = 20.0
     MUTATIONS = MUTATIONS
 
     RESERVOIRS = "reservoirs"
@@ -93,7 +90,7 @@ class ReSTIRPT(PathReuseIntegrator):
         self.run_stage("trace_initial", initial, [sc, p, gb.current], [res.current])
         if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
-        for rd in range(self.settings.spatial_rounds):
+        for rd in range(self.settings.spatial.rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
                             mutation == "spatial_in_place")

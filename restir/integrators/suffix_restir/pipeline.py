@@ -17,6 +17,7 @@ from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
+from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from ..path_reuse.direct_light import DISettings, di_component
 from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from .params import GATHER_MIS, SRParams
@@ -44,6 +45,10 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
 })
 
 
+# The suffix spatial reuse's and the gather fallback's radius at 1080 lines ("auto").
+SPATIAL_RADIUS_1080 = 30.0
+
+
 # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image.
 @dataclasses.dataclass
 class SuffixSettings(PathReuseSettings):
@@ -67,10 +72,8 @@ class SuffixSettings(PathReuseSettings):
     suffix_temporal: bool = setting("suffix.temporal", True, "temporal reuse of suffixes (pairwise, K = 1)")
     suffix_temporal_cap: float = setting("suffix.temporal.cap", 50.0, "suffix history confidence capped to this "
                                          "(absolute; <= 0: no cap)")
-    suffix_spatial_rounds: int = setting("suffix.spatial.rounds", 1, "suffix spatial reuse rounds (pairwise MIS)")
-    suffix_spatial_neighbors: int = setting("suffix.spatial.neighbors", 3, "neighbours per round")
-    suffix_spatial_radius: str = setting("suffix.spatial.radius", "auto", "neighbour disk radius in pixels; auto: "
-                                         "30 px at 1080 lines scaled with the height, >= 2")
+    suffix_spatial: SpatialReuseSettings = spatial_reuse("suffix.spatial.", radius_at_1080=SPATIAL_RADIUS_1080,
+                                                         doc_prefix="suffix ")
     gather_prefixes: int = setting("gather.prefixes", 4, "N: fresh prefixes per pixel in the final gather")
     gather_suffixes: int = setting("gather.suffixes", 1, "M: neighbour suffixes gathered per prefix "
                                    f"(1-{SR_MAX_GATHER_SUFFIXES})")
@@ -104,10 +107,9 @@ class SuffixReSTIR(PathReuseIntegrator):
     Settings = SuffixSettings
     DESCRIPTION = ("Suffix ReSTIR (conditional RIS): prefix and suffix reuse, a prefix search structure and a final "
                    "gather of suffixes from neighbouring prefixes")
-    SPATIAL_RADIUS_1080 = 30.0
     MUTATIONS = MUTATIONS
 
-    SPATIAL_KEYS = ("suffix.spatial.rounds", "suffix.spatial.neighbors", "suffix.spatial.radius")
+    SPATIAL = "suffix_spatial"
     RESERVOIRS = "suffixes"
     # No third suffix buffer: the suffix stage reads the history and writes the other buffer, so
     # the spatial rounds ping-pong between that one and the history's, which is free by then.
@@ -119,7 +121,7 @@ class SuffixReSTIR(PathReuseIntegrator):
 
         s = settings
         SuffixReSTIR.check_path_settings(s)
-        resolve_spatial_radius(s.gather_fallback_radius, SuffixReSTIR.SPATIAL_RADIUS_1080, 1)
+        resolve_spatial_radius(s.gather_fallback_radius, SPATIAL_RADIUS_1080, 1)
         if not 1 <= s.gather_prefixes <= SR_MAX_GATHER_PREFIXES:
             raise ConfigError(f"gather.prefixes must be in [1, {SR_MAX_GATHER_PREFIXES}]")
         if not 1 <= s.gather_suffixes <= SR_MAX_GATHER_SUFFIXES:
@@ -142,7 +144,7 @@ class SuffixReSTIR(PathReuseIntegrator):
     def allocate(self) -> None:
         s = self.settings
         self.allocate_path_reuse()
-        self.fallback_radius = resolve_spatial_radius(s.gather_fallback_radius, self.SPATIAL_RADIUS_1080,
+        self.fallback_radius = resolve_spatial_radius(s.gather_fallback_radius, SPATIAL_RADIUS_1080,
                                                       self.height)
         if s.gather_fallback_radius == "auto":
             s.gather_fallback_radius = self.fallback_radius
@@ -273,7 +275,7 @@ class SuffixReSTIR(PathReuseIntegrator):
                                           self.prefixes.previous, self.prefix_gbs.previous, res.previous],
                        [res.current, self.shift_events])
         self.count_shifts("suffix")
-        for rd in range(self.settings.suffix_spatial_rounds):
+        for rd in range(self.settings.suffix_spatial.rounds):
             p.pt.spatial_round = rd
             self.pass_out = res.previous
             self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
