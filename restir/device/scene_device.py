@@ -6,6 +6,7 @@ normals and uvs need no second index buffer.
 import warp as wp
 
 from .bsdf import Material
+from .textures import Texture, texture_eval
 
 
 @wp.struct
@@ -22,6 +23,9 @@ class SceneDevice:
     tri_emission: wp.array(dtype=wp.vec3)  # area-emitter radiance (front side), 0 if not emissive
     tri_light_pdf: wp.array(dtype=float)   # P(select triangle) / area: NEE density in area measure
     materials: wp.array(dtype=Material)
+    # per material, the texture index of reflectance, specular_reflectance, specular_transmittance
+    # (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
+    material_textures: wp.array(dtype=wp.vec3i)
     # Emissive triangles, chosen in proportion to power by a Walker alias table.
     light_tri: wp.array(dtype=wp.int32)
     light_prob: wp.array(dtype=float)
@@ -38,42 +42,27 @@ class SceneDevice:
     env_marginal_cdf: wp.array(dtype=float)     # height+1
     env_conditional_cdf: wp.array(dtype=float)  # height * (width+1)
     env_select_prob: float                 # P(NEE picks the environment)
-    # Textures (RGB, bilinear-free nearest lookup), packed into one array.
+    # Textures (device/textures.py): their records, and every bitmap's texels packed in one array
+    textures: wp.array(dtype=Texture)
     tex_pixels: wp.array(dtype=wp.vec3)
-    tex_offset: wp.array(dtype=wp.int32)
-    tex_width: wp.array(dtype=wp.int32)
-    tex_height: wp.array(dtype=wp.int32)
 
 
 @wp.func
-def texel(scene: SceneDevice, tex: int, x: int, y: int) -> wp.vec3:
-    w = scene.tex_width[tex]
-    h = scene.tex_height[tex]
-    xi = ((x % w) + w) % w
-    yi = ((y % h) + h) % h
-    return scene.tex_pixels[scene.tex_offset[tex] + yi * w + xi]
-
-
-@wp.func
-def texture_bilinear(scene: SceneDevice, tex: int, uv: wp.vec2) -> wp.vec3:
-    """Mitsuba's bitmap lookup: uv (0,0) is the first (top-left) texel, repeat wrapping."""
-    x = uv[0] * float(scene.tex_width[tex]) - 0.5
-    y = uv[1] * float(scene.tex_height[tex]) - 0.5
-    x0 = wp.floor(x)
-    y0 = wp.floor(y)
-    fx = x - x0
-    fy = y - y0
-    xi = int(x0)
-    yi = int(y0)
-    a = texel(scene, tex, xi, yi) * (1.0 - fx) + texel(scene, tex, xi + 1, yi) * fx
-    b = texel(scene, tex, xi, yi + 1) * (1.0 - fx) + texel(scene, tex, xi + 1, yi + 1) * fx
-    return a * (1.0 - fy) + b * fy
+def texture_or_constant(scene: SceneDevice, tex: int, uv: wp.vec2, constant: wp.vec3) -> wp.vec3:
+    if tex >= 0:
+        return texture_eval(scene.textures, scene.tex_pixels, tex, uv)
+    return constant
 
 
 @wp.func
 def material_at(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
-    """The triangle's material with textured parameters resolved at uv."""
-    m = scene.materials[scene.tri_material[tri]]
-    if m.reflectance_tex >= 0:
-        m.reflectance = texture_bilinear(scene, m.reflectance_tex, uv)
+    """The triangle's material with textured parameters resolved at uv: the one place textures
+    are read (a BSDF sees constants), so a parameter becomes texturable here and in the loader
+    (scene.py `spectrum`), not in every material kind."""
+    i = scene.tri_material[tri]
+    m = scene.materials[i]
+    tex = scene.material_textures[i]
+    m.reflectance = texture_or_constant(scene, tex[0], uv, m.reflectance)
+    m.specular_reflectance = texture_or_constant(scene, tex[1], uv, m.specular_reflectance)
+    m.specular_transmittance = texture_or_constant(scene, tex[2], uv, m.specular_transmittance)
     return m

@@ -8,6 +8,7 @@ import numpy as np
 from . import shapes as shape_lib
 from .errors import SceneError, warn
 from .props import Props
+from .textures import FILTERS, WRAPS, TextureDesc, uv_transform
 from .transforms import transform_normals, transform_points
 
 KINDS = {
@@ -20,7 +21,7 @@ KINDS = {
     "rfilter": {"box", "tent", "gaussian"},
     "sampler": {"independent", "stratified", "multijitter", "orthogonal", "ldsampler"},
     "integrator": {"path", "direct", "volpath", "path_guiding_integrator", "aov"},
-    "texture": {"bitmap"},
+    "texture": {"bitmap", "checkerboard"},
 }
 TYPE_TO_KIND = {t: k for k, ts in KINDS.items() for t in ts}
 
@@ -34,12 +35,17 @@ IOR_TABLE = {
 }
 
 
+# The spectra a texture may drive, in the order of SceneDevice.material_textures' components; the
+# loader reads each with `spectrum()` and the device resolves it in `material_at`.
+TEXTURED_PARAMETERS = ("reflectance", "specular_reflectance", "specular_transmittance")
+
+
 @dataclass
 class MaterialDesc:
     kind: str
     twosided: bool = False
     reflectance: np.ndarray = field(default_factory=lambda: np.full(3, 0.5))
-    reflectance_tex: int = -1
+    textures: dict = field(default_factory=dict)  # parameter (one of TEXTURED_PARAMETERS) -> texture index
     specular_reflectance: np.ndarray = field(default_factory=lambda: np.ones(3))
     specular_transmittance: np.ndarray = field(default_factory=lambda: np.ones(3))
     eta: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -110,7 +116,7 @@ class Scene:
     env_radiance: np.ndarray = field(default_factory=lambda: np.zeros(3))
     env_to_world: np.ndarray = field(default_factory=lambda: np.eye(3))
     env_image: np.ndarray | None = None
-    textures: list[np.ndarray] = field(default_factory=list)
+    textures: list[TextureDesc] = field(default_factory=list)
 
     @property
     def num_triangles(self) -> int:
@@ -139,7 +145,7 @@ class _Builder:
         self.base_dir = tree.get("_base_dir", os.getcwd())
         self.materials: list[MaterialDesc] = []
         self.material_index: dict[int, int] = {}
-        self.textures: list[np.ndarray] = []
+        self.textures: list[TextureDesc] = []
         self.parts: list[tuple] = []
         self.env = None
         self.camera = None
@@ -313,12 +319,7 @@ class _Builder:
         if t == "twosided":
             raise SceneError("nested twosided BSDFs are not supported", p.loc)
         if t == "diffuse":
-            r = p.color_or_texture("reflectance", np.full(3, 0.5))
-            if isinstance(r, dict):
-                m.reflectance_tex = self.texture(r)
-                m.reflectance = np.ones(3)
-            else:
-                m.reflectance = r
+            self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))
         if t in ("conductor", "roughconductor"):
             material = p.string("material", "none")
             if p.has("eta") or material == "none":
@@ -326,31 +327,23 @@ class _Builder:
                 m.k = p.rgb("k", np.ones(3))
             else:
                 raise SceneError(f"named conductor material '{material}' is not supported; give eta and k", p.loc)
-            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
+            self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
         if t in ("dielectric", "thindielectric", "roughdielectric"):
             int_ior = self.ior(p, "int_ior", 1.5046)
             ext_ior = self.ior(p, "ext_ior", 1.000277)
             if int_ior <= 0 or ext_ior <= 0:
                 raise SceneError("IORs must be positive", p.loc)
             m.ior = int_ior / ext_ior
-            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
-            m.specular_transmittance = p.rgb("specular_transmittance", np.ones(3))
+            self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
+            self.spectrum(p, m, "specular_transmittance", "specular_transmittance", np.ones(3))
         if t in ("plastic", "roughplastic"):
             int_ior = self.ior(p, "int_ior", IOR_TABLE["polypropylene"])
             ext_ior = self.ior(p, "ext_ior", IOR_TABLE["air"])
             if int_ior <= 0 or ext_ior <= 0:
                 raise SceneError("IORs must be positive", p.loc)
             m.ior = int_ior / ext_ior
-            r = p.color_or_texture("diffuse_reflectance", np.full(3, 0.5))
-            if isinstance(r, dict):
-                m.reflectance_tex = self.texture(r)
-                m.reflectance = np.ones(3)
-                d_mean = float(self.textures[m.reflectance_tex].mean())
-            else:
-                m.reflectance = r
-                d_mean = float(np.mean(r))
-            m.specular_reflectance = p.rgb("specular_reflectance", np.ones(3))
-            s_mean = float(np.mean(m.specular_reflectance))
+            d_mean = self.spectrum(p, m, "diffuse_reflectance", "reflectance", np.full(3, 0.5))
+            s_mean = self.spectrum(p, m, "specular_reflectance", "specular_reflectance", np.ones(3))
             m.specular_sampling_weight = s_mean / (d_mean + s_mean)
             m.nonlinear = p.bool("nonlinear", False)
             if t == "plastic":
@@ -386,19 +379,47 @@ class _Builder:
         p.warn_unqueried()
         return m
 
+    def spectrum(self, p: Props, m: MaterialDesc, name: str, param: str, default: np.ndarray) -> float:
+        """The RGB parameter `name` of the BSDF into the material's `param` (a constant, or a
+        texture index that the device resolves at each hit: scene_device.material_at); returns
+        its mean value (of the texture's texels if textured), which sampling weights use."""
+        v = p.color_or_texture(name, default)
+        if isinstance(v, dict):
+            m.textures[param] = self.texture(v)
+            setattr(m, param, np.ones(3))
+            return self.textures[m.textures[param]].mean()
+        setattr(m, param, v)
+        return float(np.mean(v))
+
     def texture(self, obj) -> int:
+        """A bitmap or checkerboard (scene/textures.py) into the scene's textures; its index."""
         p = self.props(obj, "texture")
-        fname = p.string("filename")
-        path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
-        if not os.path.exists(path):
-            raise SceneError(f"texture file '{fname}' not found", p.loc)
-        img = _read_image(path, fname, p.loc, linearize_srgb=not p.bool("raw", False))
-        for k in ("filter_type", "wrap_mode"):
-            if p.has(k):
-                p.string(k)
+        to_uv, dropped = uv_transform(p.transform("to_uv"))
+        if dropped:
+            warn("'to_uv': the third column of the transform's first two rows is ignored, as Mitsuba 3 "
+                 "ignores it (a uv offset is <translate x=.. y=..>)", p._loc_of("to_uv"))
+        if p.type == "checkerboard":
+            t = TextureDesc("checkerboard", to_uv, color0=p.rgb("color0", np.full(3, 0.4)),
+                            color1=p.rgb("color1", np.full(3, 0.2)))
+        else:
+            fname = p.string("filename")
+            path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+            if not os.path.exists(path):
+                raise SceneError(f"texture file '{fname}' not found", p.loc)
+            img = _read_image(path, fname, p.loc, linearize_srgb=not p.bool("raw", False))
+            t = TextureDesc("bitmap", to_uv, img, filter=self.choice(p, "filter_type", "bilinear", FILTERS),
+                            wrap=self.choice(p, "wrap_mode", "repeat", WRAPS))
         p.warn_unqueried()
-        self.textures.append(img)
+        self.textures.append(t)
         return len(self.textures) - 1
+
+    @staticmethod
+    def choice(p: Props, name: str, default: str, allowed: tuple) -> str:
+        v = p.string(name, default)
+        if v not in allowed:
+            raise SceneError(f"'{p.type}': {name} '{v}' is not supported (one of {', '.join(allowed)})",
+                             p._loc_of(name))
+        return v
 
     # --------------------------------------------------------------- shapes and emitters
     def shape(self, obj):

@@ -5,11 +5,13 @@ import warp as wp
 from ..device.bsdf import Material
 from ..device.camera import Camera
 from ..device.scene_device import SceneDevice
+from ..device.textures import (TEX_BITMAP, TEX_CHECKERBOARD, TEX_FILTER_BILINEAR, TEX_FILTER_NEAREST, TEX_WRAP_CLAMP,
+                               TEX_WRAP_MIRROR, TEX_WRAP_REPEAT, Texture)
 from ..device.types import (ENV_CONSTANT, ENV_MAP, ENV_NONE, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT,
                             MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
-from .scene import Scene
+from .scene import TEXTURED_PARAMETERS, Scene
 
 MATERIAL_KIND = {
     "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
@@ -26,7 +28,6 @@ def material_struct(m, device="cpu") -> Material:
     s.kind = int(MATERIAL_KIND[m.kind])
     s.twosided = int(m.twosided)
     s.reflectance = wp.vec3(*m.reflectance)
-    s.reflectance_tex = int(m.reflectance_tex)
     s.specular_reflectance = wp.vec3(*m.specular_reflectance)
     s.specular_transmittance = wp.vec3(*m.specular_transmittance)
     s.eta = wp.vec3(*m.eta)
@@ -91,6 +92,8 @@ class DeviceScene:
         self._arrays += [ms.coat_transmittance for ms in structs]
         s.materials = wp.array(structs, dtype=Material, device=self.device)
         self._arrays.append(s.materials)
+        s.material_textures = self._arr(np.array([[m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
+                                                  for m in sc.materials], np.int32).reshape(-1, 3), wp.vec3i)
 
         power = sc.light_power()
         lights = np.nonzero(power > 0)[0].astype(np.int32)
@@ -127,19 +130,32 @@ class DeviceScene:
         has_env = sc.env_kind != "none"
         s.env_select_prob = float(1.0 if has_env and not len(lights) else (0.5 if has_env else 0.0))
 
-        texels, offsets, widths, heights = [np.zeros((1, 3), np.float32)], [], [], []
-        off = 1
-        for t in sc.textures:
-            offsets.append(off)
-            heights.append(t.shape[0])
-            widths.append(t.shape[1])
-            texels.append(t.reshape(-1, 3).astype(np.float32))
-            off += t.shape[0] * t.shape[1]
-        s.tex_pixels = self._arr(np.concatenate(texels), wp.vec3)
-        s.tex_offset = self._arr(np.array(offsets or [0], np.int32), wp.int32)
-        s.tex_width = self._arr(np.array(widths or [1], np.int32), wp.int32)
-        s.tex_height = self._arr(np.array(heights or [1], np.int32), wp.int32)
+        s.textures, s.tex_pixels = self._textures(sc.textures)
         return s
+
+    def _textures(self, descs) -> tuple:
+        """The texture records and the packed texels (element 0 a black texel, so the array is
+        never empty)."""
+        texels, records, off = [np.zeros((1, 3), np.float32)], [], 1
+        for d in descs:
+            t = Texture()
+            t.kind = TEX_CHECKERBOARD if d.kind == "checkerboard" else TEX_BITMAP
+            t.to_uv = wp.mat33(*d.to_uv.astype(np.float32).reshape(-1))
+            t.offset, t.width, t.height = off, 1, 1
+            if d.image is not None:
+                t.height, t.width = int(d.image.shape[0]), int(d.image.shape[1])
+                texels.append(d.image.reshape(-1, 3).astype(np.float32))
+                off += t.width * t.height
+            t.filter = TEX_FILTER_NEAREST if d.filter == "nearest" else TEX_FILTER_BILINEAR
+            t.wrap = {"repeat": TEX_WRAP_REPEAT, "mirror": TEX_WRAP_MIRROR, "clamp": TEX_WRAP_CLAMP}[d.wrap]
+            t.color0 = wp.vec3(*np.asarray(d.color0, np.float32))
+            t.color1 = wp.vec3(*np.asarray(d.color1, np.float32))
+            records.append(t)
+        if not records:
+            records.append(Texture())  # a placeholder: no material refers to it
+        records = wp.array(records, dtype=Texture, device=self.device)
+        self._arrays.append(records)
+        return records, self._arr(np.concatenate(texels), wp.vec3)
 
     def camera_struct(self, cd) -> Camera:
         c = Camera()

@@ -1,8 +1,15 @@
-"""A small scene exercising what the shared scenes do not: envmap (with to_world), bitmap texture,
-plastic, roughplastic (GGX and Beckmann), rough dielectric, GGX rough conductor, disk light.
+"""Small scenes exercising what the shared scenes do not, for the Mitsuba 3 comparison.
 
-`write_feature_scene(directory)` writes scene.xml, env.exr and checker.png there; both the Mitsuba
-reference generator and the test call it, so they render identical inputs.
+- `write_feature_scene`: envmap (with to_world), bitmap texture, plastic, roughplastic (GGX and
+  Beckmann), rough dielectric, GGX rough conductor, disk light (scene.xml, env.exr, checker.png);
+- `write_texture_scene`: textures on every texturable parameter, as Bitterli's scenes use them:
+  a checkerboard with `to_uv` on a rough conductor's specular_reflectance (Veach Ajar's floor),
+  bitmaps with nearest and bilinear filtering, repeat, mirror and clamp wrapping and `to_uv`, on
+  diffuse, plastic (diffuse and specular reflectance) and thindielectric (transmittance), all on
+  rectangles (whose uv both renderers define alike).
+
+Both the Mitsuba reference generator and the test call them, so they render identical inputs.
+`SCENES` names them.
 """
 import os
 
@@ -82,3 +89,83 @@ def write_feature_scene(directory: str) -> str:
     with open(path, "w") as f:
         f.write(SCENE)
     return path
+
+
+TEXTURE_SCENE = """<scene version="3.0.0">
+    <default name="spp" value="16"/>
+    <default name="resx" value="48"/>
+    <default name="resy" value="36"/>
+    <default name="max_depth" value="5"/>
+    <integrator type="path"><integer name="max_depth" value="$max_depth"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="55"/>
+        <string name="fov_axis" value="y"/>
+        <transform name="to_world"><lookat origin="0, 1.6, -4" target="0, 0.6, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="roughconductor"><float name="alpha" value="0.15"/><string name="distribution" value="ggx"/>
+            <rgb name="eta" value="1.65746, 0.880369, 0.521229"/><rgb name="k" value="9.22387, 6.26952, 4.837"/>
+            <texture name="specular_reflectance" type="checkerboard">
+                <rgb name="color0" value="0.9, 0.8, 0.3"/><rgb name="color1" value="0.15, 0.2, 0.3"/>
+                <transform name="to_uv"><scale x="4" y="8"/></transform>
+            </texture>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="3" y="1.5"/><translate y="1.5" z="2"/></transform>
+        <bsdf type="twosided"><bsdf type="diffuse">
+            <texture name="reflectance" type="bitmap"><string name="filename" value="tiles.png"/>
+                <string name="filter_type" value="nearest"/><string name="wrap_mode" value="mirror"/>
+                <transform name="to_uv"><scale x="2.5" y="1.5"/></transform>
+            </texture>
+        </bsdf></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.8" y="0.6"/><rotate y="1" angle="215"/><translate x="-1.3" y="0.7" z="0.4"/></transform>
+        <bsdf type="plastic">
+            <texture name="diffuse_reflectance" type="bitmap"><string name="filename" value="tiles.png"/>
+                <string name="wrap_mode" value="clamp"/>
+                <transform name="to_uv"><scale value="1.6"/><translate x="-0.3" y="-0.3"/></transform>
+            </texture>
+            <texture name="specular_reflectance" type="checkerboard">
+                <rgb name="color0" value="1, 1, 1"/><rgb name="color1" value="0.3, 0.3, 0.3"/>
+                <transform name="to_uv"><scale x="6" y="3"/></transform>
+            </texture>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.7" y="0.7"/><rotate y="1" angle="-30"/><translate x="1.0" y="0.75" z="-0.6"/></transform>
+        <bsdf type="thindielectric">
+            <texture name="specular_transmittance" type="bitmap"><string name="filename" value="tiles.png"/>
+                <boolean name="raw" value="true"/></texture>
+        </bsdf>
+    </shape>
+    <shape type="disk">
+        <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="90"/><translate x="0" y="3" z="0"/></transform>
+        <emitter type="area"><rgb name="radiance" value="9, 8, 7"/></emitter>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="0.15, 0.18, 0.22"/></emitter>
+</scene>
+"""
+
+
+def write_texture_scene(directory: str) -> str:
+    from PIL import Image
+
+    os.makedirs(directory, exist_ok=True)
+    cv, cu = np.mgrid[0:8, 0:12]
+    tiles = np.stack([40 + 200 * (cu / 11.0), 60 + 150 * (cv / 7.0), 220 - 20 * ((cu + cv) % 3)], -1).astype(np.uint8)
+    tiles[0, 0] = [255, 0, 0]   # the uv origin and the far corner marked: a flipped or shifted
+    tiles[-1, -1] = [0, 0, 0]   # axis, or a wrong wrap, shows up in the comparison
+    Image.fromarray(tiles).save(os.path.join(directory, "tiles.png"))
+    path = os.path.join(directory, "scene.xml")
+    with open(path, "w") as f:
+        f.write(TEXTURE_SCENE)
+    return path
+
+
+SCENES = {"features": write_feature_scene, "textures": write_texture_scene}

@@ -27,6 +27,7 @@ REFERENCES = {
     "veach-mis": (64, 36, 3, 4096, 16),
     "veach-bidir": (48, 48, 7, 8192, 16),
     "features": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: envmap, texture, plastic, ...
+    "textures": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: checkerboard, filter / wrap modes, to_uv
 }
 
 
@@ -37,6 +38,8 @@ def main():
     args = ap.parse_args()
     import mitsuba as mi
 
+    from tests.data.feature_scene import SCENES
+
     mi.set_variant(args.variant)
     from restir.image_io import write_exr
 
@@ -44,12 +47,10 @@ def main():
     os.makedirs(out_dir, exist_ok=True)
     for name in args.scenes:
         resx, resy, depth, spp, k = REFERENCES[name]
-        if name == "features":
+        if name in SCENES:
             import tempfile
 
-            from tests.data.feature_scene import write_feature_scene
-
-            path = write_feature_scene(tempfile.mkdtemp())
+            path = SCENES[name](tempfile.mkdtemp())
         else:
             path = os.path.join(SHARED, name, "scene.xml")
         scene = mi.load_file(path, resx=resx, resy=resy, max_depth=depth, spp=spp)
@@ -58,7 +59,7 @@ def main():
         mean, var = imgs.mean(0), imgs.var(0, ddof=1) / k
         write_exr(os.path.join(out_dir, f"{name}.mean.exr"), mean.astype(np.float32))
         write_exr(os.path.join(out_dir, f"{name}.var.exr"), var.astype(np.float32))
-        meta = {"scene": "tests/data/feature_scene.py" if name == "features" else f"shared/scenes/{name}/scene.xml", "mitsuba": mi.__version__, "variant": args.variant,
+        meta = {"scene": f"tests/data/feature_scene.py ({name})" if name in SCENES else f"shared/scenes/{name}/scene.xml", "mitsuba": mi.__version__, "variant": args.variant,
                 "resx": resx, "resy": resy, "max_depth": depth, "spp_per_render": spp, "renders": k,
                 "seconds": round(time.time() - t0, 1), "machine": platform.machine(),
                 "command": "python tests/data/make_mitsuba_references.py --scenes " + name}

@@ -1,5 +1,7 @@
 """Slow tier: the path tracer against Mitsuba 3 references of the three shared scenes, and of
-tests/data/feature_scene.py (envmap, bitmap texture, plastic, rough dielectric, GGX, disk light).
+the generated scenes of tests/data/feature_scene.py (features: envmap, bitmap texture, plastic,
+rough dielectric, GGX, disk light; textures: checkerboard, filter and wrap modes, to_uv, textures
+on every texturable parameter).
 
 References: tests/data/mitsuba/NAME.{mean,var}.exr, made by tests/data/make_mitsuba_references.py
 (its settings and command are in NAME.json). Ours: FRAMES frames as batch means; Welch z with
@@ -23,23 +25,32 @@ from tests.shared_scenes import scene_path
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 FRAMES = 32
-SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256}
-MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01}
+SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256}
+MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01}
+
+
+# "textures": the textured parameters match Mitsuba tile by tile, but the image is 0.3% brighter than
+# Mitsuba's in every channel (z ~ 9-15), and stays so with every texture replaced by a constant, the
+# pane, plastic, wall and environment removed and the disk light made a rectangle (a diffuse floor,
+# one diffuse rectangle and a rectangle light: ratio 1.0033, Mitsuba's error 1e-4): a difference
+# outside the textures, found here and not yet explained (issue 21). Strict: it fails once fixed.
+TEXTURES_XFAIL = pytest.mark.xfail(strict=True, reason="0.3% brighter than Mitsuba without any texture (see above)")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features"])
+@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features",
+                                  pytest.param("textures", marks=TEXTURES_XFAIL)])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
     if not meta_path.exists():
         pytest.skip(f"reference {meta_path} missing")
-    scene_file = None if name == "features" else scene_path(name)  # skips when the shared scenes are missing
+    from tests.data.feature_scene import SCENES
+
+    scene_file = None if name in SCENES else scene_path(name)  # skips when the shared scenes are missing
     meta = json.loads(meta_path.read_text())
     ref, ref_var = read_exr(str(DATA / f"{name}.mean.exr")), read_exr(str(DATA / f"{name}.var.exr"))
-    if name == "features":
-        from tests.data.feature_scene import write_feature_scene
-
-        scene = restir.load_scene(write_feature_scene(str(tmp_path)))
+    if name in SCENES:
+        scene = restir.load_scene(SCENES[name](str(tmp_path)))
     else:
         scene = restir.load_scene(str(scene_file))
     cfg = restir.RenderConfig(spp=SPP[name], frames=FRAMES, width=meta["resx"], height=meta["resy"],

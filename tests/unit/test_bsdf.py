@@ -29,7 +29,6 @@ def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
     m.kind = int(kind)
     m.twosided = twosided
     m.reflectance = wp.vec3(0.8, 0.5, 0.2)
-    m.reflectance_tex = -1
     m.specular_reflectance = wp.vec3(1.0, 0.9, 0.8)
     m.specular_transmittance = wp.vec3(1.0, 1.0, 1.0)
     m.eta = wp.vec3(0.2, 0.92, 1.1)
