@@ -15,21 +15,27 @@ import os
 
 import numpy as np
 
-SCENE = """<scene version="3.0.0">
+
+def _header(fov: str, origin: str, target: str) -> str:
+    """The scene element's opening, defaults, integrator and sensor (48 x 36, box filter)."""
+    return f"""<scene version="3.0.0">
     <default name="spp" value="16"/>
     <default name="resx" value="48"/>
     <default name="resy" value="36"/>
     <default name="max_depth" value="5"/>
     <integrator type="path"><integer name="max_depth" value="$max_depth"/></integrator>
     <sensor type="perspective">
-        <float name="fov" value="50"/>
+        <float name="fov" value="{fov}"/>
         <string name="fov_axis" value="y"/>
-        <transform name="to_world"><lookat origin="0, 1.2, -4" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+        <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
         <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
         <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
             <rfilter type="box"/></film>
     </sensor>
-    <emitter type="envmap">
+"""
+
+
+SCENE = _header("50", "0, 1.2, -4", "0, 0.3, 0") + """    <emitter type="envmap">
         <string name="filename" value="env.exr"/>
         <float name="scale" value="1.5"/>
         <transform name="to_world"><rotate y="1" angle="40"/></transform>
@@ -91,21 +97,7 @@ def write_feature_scene(directory: str) -> str:
     return path
 
 
-TEXTURE_SCENE = """<scene version="3.0.0">
-    <default name="spp" value="16"/>
-    <default name="resx" value="48"/>
-    <default name="resy" value="36"/>
-    <default name="max_depth" value="5"/>
-    <integrator type="path"><integer name="max_depth" value="$max_depth"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="55"/>
-        <string name="fov_axis" value="y"/>
-        <transform name="to_world"><lookat origin="0, 1.6, -4" target="0, 0.6, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
-            <rfilter type="box"/></film>
-    </sensor>
-    <shape type="rectangle">
+TEXTURE_SCENE = _header("55", "0, 1.6, -4", "0, 0.6, 0") + """    <shape type="rectangle">
         <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
         <bsdf type="roughconductor"><float name="alpha" value="0.15"/><string name="distribution" value="ggx"/>
             <rgb name="eta" value="1.65746, 0.880369, 0.521229"/><rgb name="k" value="9.22387, 6.26952, 4.837"/>

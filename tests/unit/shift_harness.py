@@ -13,7 +13,8 @@ same shift on two kinds of domain): test kernels that call the production shift
 import numpy as np
 import warp as wp
 
-from restir.device.bsdf import Material, bsdf_sample, microfacet_of
+from restir.device.bsdf import Material, bsdf_sample
+from restir.device.bsdfs.material import microfacet_of
 from restir.device.intersect import T_MAX, surface_at, trace_closest
 from restir.device.microfacet import microfacet_sample_to_square
 from restir.device.path_steps import scatter
