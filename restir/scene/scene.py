@@ -465,7 +465,10 @@ class _Builder:
             else:
                 raise SceneError(f"a {kind} cannot be nested in a shape", child.get("_loc"))
         if bsdf_obj is None:
+            # Mitsuba 3's default: diffuse 0.5, but black on an emitter (checked with its own loader)
             bsdf_obj = {"type": "diffuse", "_kind": "bsdf", "_loc": p.loc}
+            if emitter_obj is not None:
+                bsdf_obj["reflectance"] = np.zeros(3)
         mat = self.material(bsdf_obj)
         emission = np.zeros(3)
         if emitter_obj is not None:

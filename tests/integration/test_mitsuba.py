@@ -29,17 +29,8 @@ SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 25
 MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01}
 
 
-# "textures": the textured parameters match Mitsuba tile by tile, but the image is 0.3% brighter than
-# Mitsuba's in every channel (z ~ 9-15), and stays so with every texture replaced by a constant, the
-# pane, plastic, wall and environment removed and the disk light made a rectangle (a diffuse floor,
-# one diffuse rectangle and a rectangle light: ratio 1.0033, Mitsuba's error 1e-4): a difference
-# outside the textures, found here and not yet explained (issue 21). Strict: it fails once fixed.
-TEXTURES_XFAIL = pytest.mark.xfail(strict=True, reason="0.3% brighter than Mitsuba without any texture (see above)")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features",
-                                  pytest.param("textures", marks=TEXTURES_XFAIL)])
+@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures"])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
     if not meta_path.exists():
