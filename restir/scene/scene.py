@@ -265,6 +265,11 @@ class _Builder:
         for k in ("banner", "sample_border"):
             if p.has(k):
                 p.bool(k)
+        if p.has("high_quality_edges") and p.bool("high_quality_edges"):
+            # Mitsuba 0.6's option (Mitsuba 3 stops on it): samples outside the image for the
+            # border pixels' filter; here only a filter radius of border pixels differs
+            warn("high_quality_edges (Mitsuba 0.6) is ignored: the border pixels are filtered from samples "
+                 "inside the image only", p.loc)
         filt = ("gaussian", 2.0, 0.5)
         for child in p.children():
             fp = self.props(child, "rfilter")

@@ -1,4 +1,4 @@
-"""Mitsuba 3 XML -> nested dict tree (Mitsuba's `load_dict` layout), keeping file:line.
+"""Mitsuba 3 XML (and 0.5/0.6 files, upgraded first: upgrade.py) -> nested dict tree (Mitsuba's `load_dict` layout), keeping file:line.
 
 Every object dict has 'type' and '_loc'; parameters are plain values (float, int, bool, str,
 np.ndarray for points/vectors, 4x4 np.ndarray for transforms, {'type': 'rgb', 'value': ...});
@@ -11,7 +11,7 @@ import xml.parsers.expat
 
 import numpy as np
 
-from . import transforms
+from . import transforms, upgrade
 from .errors import SceneError, warn
 
 OBJECT_TAGS = {"bsdf", "shape", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture"}
@@ -230,6 +230,11 @@ def load_xml(path: str, defines: dict[str, str] | None = None, required: set[str
     reader = _Reader(path, defines or {})
     if root.tag != "scene":
         raise SceneError(f"the root element must be <scene>, not <{root.tag}>", reader.loc(root))
+    if "version" not in root.attrib:
+        raise SceneError("<scene> needs a version attribute (e.g. version=\"3.0.0\"), as Mitsuba 3 requires: "
+                         "the format of the file depends on it", reader.loc(root))
+    if upgrade.needs_upgrade(upgrade.parse_version(root.attrib["version"], reader.loc(root)), reader.loc(root)):
+        upgrade.upgrade_v1(root, _Node)
     scene = {"type": "scene", "_loc": reader.loc(root), "_kind": "scene"}
     reader.fill(scene, root)
     for name in sorted(reader.cli_defines - reader.used):  # a typo, or a scene without that parameter

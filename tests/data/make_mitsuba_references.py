@@ -12,6 +12,7 @@ import argparse
 import json
 import os
 import platform
+import re
 import sys
 import time
 
@@ -28,7 +29,38 @@ REFERENCES = {
     "veach-bidir": (48, 48, 7, 8192, 16),
     "features": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: envmap, texture, plastic, ...
     "textures": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: checkerboard, filter / wrap modes, to_uv
+    "veach-ajar": (64, 36, 13, 4096, 16),
+    "staircase2": (64, 36, 65, 4096, 16),  # Mitsuba 0.5 as distributed; its own max_depth
 }
+
+# Options Mitsuba 3 refuses and restir accepts with a warning: taken out of the copy Mitsuba reads
+MITSUBA_REFUSES = re.compile(r"<boolean name=\"(high_quality_edges|highQualityEdges)\"[^>]*/>")
+
+
+def load_for_mitsuba(mi, path, resx, resy, depth, spp):
+    """The scene as Mitsuba 3 renders it at the given settings, and the integrator to render with.
+    A scene without resx/resy/max_depth/spp parameters (as distributed) gets its film resized and
+    a path integrator of that depth; options Mitsuba refuses are dropped from a copy beside links
+    to the scene's folders."""
+    import tempfile
+
+    text = open(path).read()
+    if MITSUBA_REFUSES.search(text):
+        tmp = tempfile.mkdtemp()
+        folder = os.path.dirname(path)
+        for entry in os.listdir(folder):
+            os.symlink(os.path.join(folder, entry), os.path.join(tmp, entry))
+        os.remove(os.path.join(tmp, os.path.basename(path)))
+        path = os.path.join(tmp, os.path.basename(path))
+        with open(path, "w") as f:
+            f.write(MITSUBA_REFUSES.sub("", text))
+    if "$resx" in text:
+        return mi.load_file(path, resx=resx, resy=resy, max_depth=depth, spp=spp), None
+    scene = mi.load_file(path)
+    params = mi.traverse(scene.sensors()[0])
+    params["film.size"] = [resx, resy]
+    params.update()
+    return scene, mi.load_dict({"type": "path", "max_depth": depth})
 
 
 def main():
@@ -53,9 +85,10 @@ def main():
             path = SCENES[name](tempfile.mkdtemp())
         else:
             path = os.path.join(SHARED, name, "scene.xml")
-        scene = mi.load_file(path, resx=resx, resy=resy, max_depth=depth, spp=spp)
+        scene, integrator = load_for_mitsuba(mi, path, resx, resy, depth, spp)
         t0 = time.time()
-        imgs = np.stack([np.asarray(mi.render(scene, spp=spp, seed=1000 + i), np.float64)[..., :3] for i in range(k)])
+        imgs = np.stack([np.asarray(mi.render(scene, integrator=integrator, spp=spp, seed=1000 + i), np.float64)[..., :3]
+                         for i in range(k)])
         mean, var = imgs.mean(0), imgs.var(0, ddof=1) / k
         write_exr(os.path.join(out_dir, f"{name}.mean.exr"), mean.astype(np.float32))
         write_exr(os.path.join(out_dir, f"{name}.var.exr"), var.astype(np.float32))

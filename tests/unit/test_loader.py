@@ -37,3 +37,106 @@ def test_emitter_keeps_a_given_bsdf(tmp_path):
     m = _material(tmp_path, _scene('<bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf>'
                                    '<emitter type="area"><rgb name="radiance" value="1"/></emitter>'))
     np.testing.assert_allclose(m.reflectance, [0.3, 0.3, 0.3])
+
+
+# ----------------------------------------------------------------------------- Mitsuba 0.5 / 0.6 files
+# The names Mitsuba 3's upgrade produces (src/core/parser.cpp camel_to_underscore_case, b45b0a9)
+CAMEL = {"toWorld": "to_world", "lookAt": "look_at", "maxDepth": "max_depth", "rrDepth": "rr_depth",
+         "sampleCount": "sample_count", "fovAxis": "fov_axis", "intIOR": "int_ior", "extIOR": "ext_ior",
+         "specularReflectance": "specular_reflectance", "highQualityEdges": "high_quality_edges",
+         "sRGB": "s_rgb", "toWorld2": "to_world2", "uvscale": "uvscale", "uoffset": "uoffset",
+         "IORValue": "IORValue", "uv2Scale": "uv2Scale", "XYZ": "XYZ", "aBcD": "a_bc_d"}
+
+
+def test_camel_to_snake_as_mitsuba():
+    from restir.scene.upgrade import camel_to_snake
+
+    assert {k: camel_to_snake(k) for k in CAMEL} == CAMEL
+
+
+# one scene in both formats: the 0.5 text uses every rule of the upgrade
+V05 = """<scene version="0.5.0">
+    <integrator type="path"><integer name="maxDepth" value="7"/><integer name="rrDepth" value="3"/></integrator>
+    <sensor type="perspective"><float name="fov" value="40"/><string name="fovAxis" value="y"/>
+        <transform name="toWorld"><lookAt origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sampleCount" value="9"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+            <string name="pixelFormat" value="rgb"/></film>
+    </sensor>
+    <bsdf type="diffuse" id="checks"><texture type="checkerboard" name="diffuseReflectance">
+        <float name="uscale" value="4"/><float name="voffset" value="0.25"/></texture></bsdf>
+    <bsdf type="roughplastic" id="coat"><float name="intIOR" value="1.6"/><float name="extIOR" value="1.1"/>
+        <rgb name="diffuseReflectance" value="0.2, 0.3, 0.4"/><float name="alpha" value="0.2"/></bsdf>
+    <shape type="rectangle"><ref id="checks"/><transform name="toWorld"><translate x="0.5"/></transform></shape>
+    <shape type="rectangle"><ref name="bsdf" id="coat"/><boolean name="flipNormals" value="true"/></shape>
+</scene>"""
+V3 = """<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="7"/><integer name="rr_depth" value="3"/></integrator>
+    <sensor type="perspective"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
+        <transform name="to_world"><lookat origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="9"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+            <string name="pixel_format" value="rgb"/></film>
+    </sensor>
+    <bsdf type="diffuse" id="checks"><texture type="checkerboard" name="reflectance">
+        <transform name="to_uv"><translate y="0.25"/><scale x="4"/></transform></texture></bsdf>
+    <bsdf type="roughplastic" id="coat"><float name="int_ior" value="1.6"/><float name="ext_ior" value="1.1"/>
+        <rgb name="diffuse_reflectance" value="0.2, 0.3, 0.4"/><float name="alpha" value="0.2"/></bsdf>
+    <shape type="rectangle"><ref id="checks"/><transform name="to_world"><translate x="0.5"/></transform></shape>
+    <shape type="rectangle"><ref name="bsdf" id="coat"/><boolean name="flip_normals" value="true"/></shape>
+</scene>"""
+
+
+def _load_text(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    return restir.load_scene(str(tmp_path / name))
+
+
+def test_v05_file_loads_as_its_v3_form(tmp_path, recwarn):
+    old, new = _load_text(tmp_path, "old.xml", V05), _load_text(tmp_path, "new.xml", V3)
+    assert not [w for w in recwarn if "unused" in str(w.message)], [str(w.message) for w in recwarn]
+    for f in ("positions", "normals", "uvs", "tri_smooth", "tri_material", "tri_emission"):
+        np.testing.assert_array_equal(getattr(old, f), getattr(new, f), err_msg=f)
+    assert (old.max_depth, old.rr_depth, old.spp) == (new.max_depth, new.rr_depth, new.spp) == (7, 3, 9)
+    np.testing.assert_array_equal(old.camera.to_world, new.camera.to_world)
+    assert old.camera.fov_axis == "y"
+    assert [vars(m).keys() for m in old.materials] == [vars(m).keys() for m in new.materials]
+    for a, b in zip(old.materials, new.materials):
+        for k, v in vars(a).items():
+            np.testing.assert_array_equal(v, getattr(b, k), err_msg=k)
+    assert len(old.textures) == len(new.textures) == 1
+    np.testing.assert_array_equal(old.textures[0].to_uv, new.textures[0].to_uv)
+    np.testing.assert_allclose(old.textures[0].to_uv, [[4, 0, 0], [0, 1, 0.25], [0, 0, 1]])
+    np.testing.assert_allclose(old.materials[1].reflectance, [0.2, 0.3, 0.4])  # plastic keeps diffuse_reflectance
+
+
+def test_v05_names_substituted_from_defaults(tmp_path):
+    text = V05.replace('<scene version="0.5.0">', '<scene version="0.5.0"><default name="myDepth" value="4"/>')
+    text = text.replace('name="maxDepth" value="7"', 'name="maxDepth" value="$myDepth"')
+    assert _load_text(tmp_path, "s.xml", text).max_depth == 4
+
+
+def test_v3_file_is_not_upgraded(tmp_path):
+    import pytest
+
+    with pytest.warns(UserWarning, match="unused parameter 'toWorld'"):
+        _load_text(tmp_path, "s.xml", V05.replace('version="0.5.0"', 'version="3.0.0"').replace("<lookAt", "<lookat"))
+
+
+def test_scene_versions_refused(tmp_path):
+    import pytest
+
+    from restir.scene.errors import SceneError
+
+    for version, match in ((None, "needs a version"), ("0.6", "major.minor.patch"), ("4.0.0", "newer")):
+        text = V3.replace(' version="3.0.0"', "" if version is None else f' version="{version}"')
+        with pytest.raises(SceneError, match=match):
+            _load_text(tmp_path, "s.xml", text)
+
+
+def test_high_quality_edges_warns(tmp_path):
+    import pytest
+
+    text = V05.replace('<string name="pixelFormat" value="rgb"/>', '<boolean name="highQualityEdges" value="true"/>')
+    with pytest.warns(UserWarning, match="high_quality_edges"):
+        _load_text(tmp_path, "s.xml", text)
