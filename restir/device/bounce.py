@@ -16,7 +16,7 @@ from .intersect import SurfaceHit, offset_origin
 from .lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
 from .path_steps import LightConnection, Scatter, connect_to_light, scatter
 from .rng import rng_uniform, rng_uniform2
-from .sampling import Frame
+from .sampling import Frame, frame_from_normal
 from .scene_device import SceneDevice
 from .streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIMS_PER_BOUNCE
 from .types import ENV_NONE
@@ -27,6 +27,13 @@ def bounce_dim(k: int, slot: int) -> wp.uint32:
     """The dimension of a number drawn at vertex k (slot: DIM_LIGHT_SELECT, ...), from a path's
     first number."""
     return wp.uint32((k + 1) * DIMS_PER_BOUNCE + slot)
+
+
+@wp.func
+def shading_frame(scene: SceneDevice, hit: SurfaceHit) -> Frame:
+    """The frame the BSDF at a hit is evaluated in: the one place the shading normal is decided,
+    so every path loop, shift and target function sees the same one (a bump map perturbs it here)."""
+    return frame_from_normal(hit.ns)
 
 
 @wp.func(inline=True)

@@ -2,8 +2,9 @@
 import warp as wp
 
 from ...device.bsdf import Material
+from ...device.bounce import shading_frame
 from ...device.intersect import SurfaceHit, surface_at
-from ...device.sampling import Frame, frame_from_normal, to_local
+from ...device.sampling import Frame, to_local
 from ...device.scene_device import SceneDevice, material_at
 from .gbuffer import GBuffer
 
@@ -28,7 +29,7 @@ def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     b = gb.bary[pixel]
     s.hit = surface_at(scene, tri, b[0], b[1], gb.t[pixel])
     s.mat = material_at(scene, tri, s.hit.uv)
-    s.frame = frame_from_normal(s.hit.ns)
+    s.frame = shading_frame(scene, s.hit)
     s.wi = to_local(s.frame, -gb.dir[pixel])
     s.valid = 1
     return s

@@ -30,13 +30,13 @@ Warp module of its own; the shipped shift (`shift_path`) is built with none.
 """
 import warp as wp
 
-from ...device.bounce import found_along, nee_at, scatter_at, segment
+from ...device.bounce import found_along, nee_at, scatter_at, segment, shading_frame
 from ...device.bsdf import Material, bsdf_eval, bsdf_is_delta_only, bsdf_pdf, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, is_visible, offset_origin, surface_at, trace_closest, visible_to_light
 from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.path_steps import emission_mis_weight
-from ...device.sampling import Frame, frame_from_normal, to_local
+from ...device.sampling import Frame, to_local
 from ...device.scene_device import SceneDevice, material_at
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
@@ -133,7 +133,7 @@ def make_shift(mutation: str = "none"):
             y.dist_in = segment(y.hit.p, y.hit.ng, nh.p)[3]
             y.hit = nh
             y.mat = material_at(scene, nh.tri, nh.uv)
-            y.frame = frame_from_normal(nh.ns)
+            y.frame = shading_frame(scene, nh)
             y.wi = to_local(y.frame, -sc.d)
             k += 1
         return y
@@ -238,7 +238,7 @@ def make_shift(mutation: str = "none"):
                 jac = wp.vec2(G * e.p, 1.0)
             else:
                 mat_z = material_at(scene, z.tri, z.uv)
-                frame_z = frame_from_normal(z.ns)
+                frame_z = shading_frame(scene, z)
                 wi_z = to_local(frame_z, -w1)
                 wo_z = to_local(frame_z, r.rc_wi)
                 if ends_with_nee(flags) != 0 and path_length(flags) == rcl:

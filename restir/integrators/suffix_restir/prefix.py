@@ -12,12 +12,12 @@ Prefix numbers are rng_uniform(seed, bounce_dim(k, slot)) at bounce k, as a ReST
 """
 import warp as wp
 
-from ...device.bounce import found_along, nee_at, scatter_at, segment
+from ...device.bounce import found_along, nee_at, scatter_at, segment, shading_frame
 from ...device.bsdf import Material, bsdf_has_rough_component, bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, trace_closest, visible_to_light
 from ...device.path_steps import emission_mis_weight
-from ...device.sampling import frame_from_normal, to_local
+from ...device.sampling import to_local
 from ...device.scene_device import SceneDevice, material_at
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
@@ -106,7 +106,7 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
             return out
         hit = nh
         mat = mat_next
-        frame = frame_from_normal(nh.ns)
+        frame = shading_frame(scene, nh)
         wi = to_local(frame, -sc.d)
         k += 1
     return out
@@ -120,7 +120,7 @@ def prefix_end_shading(scene: SceneDevice, p: Prefix) -> Shading:
     if p.valid != 0:
         s.hit = p.hit
         s.mat = material_at(scene, p.hit.tri, p.hit.uv)
-        s.frame = frame_from_normal(p.hit.ns)
+        s.frame = shading_frame(scene, p.hit)
         s.wi = to_local(s.frame, -p.dir)
     return s
 
@@ -220,7 +220,7 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
         footprint += seg[3]
         hit = nh
         mat = mat_next
-        frame = frame_from_normal(nh.ns)
+        frame = shading_frame(scene, nh)
         wi = to_local(frame, -sc.d)
         k += 1
     # reconnect x_{P-1} -> x_P with the recorded lobe: the destination's prefix must end at x_P too
