@@ -1,4 +1,4 @@
-"""EXR / PNG / NumPy input and output (linear float RGB arrays of shape (H, W, 3)).
+"""EXR / PNG / NumPy input and output (and Radiance HDR / PFM input) (linear float RGB arrays of shape (H, W, 3)).
 
 Output formats follow the file's extension (`IMAGE_FORMATS`); `write_image` refuses others.
 """
@@ -59,12 +59,100 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
+def read_pfm(path: str) -> np.ndarray:
+    """Portable float map: 'PF' (RGB) or 'Pf' (grey), width height, then a scale whose sign is the
+    byte order (negative: little-endian); rows are stored bottom to top."""
+    with open(path, "rb") as f:
+        data = f.read()
+    fields, pos = [], 0
+    while len(fields) < 4:  # magic, width, height, scale: whitespace-separated, one byte after the last
+        while pos < len(data) and data[pos:pos + 1].isspace():
+            pos += 1
+        start = pos
+        while pos < len(data) and not data[pos:pos + 1].isspace():
+            pos += 1
+        if start == pos:
+            raise ValueError("truncated PFM header")
+        fields.append(data[start:pos].decode("ascii", "replace"))
+    pos += 1
+    if fields[0] not in ("PF", "Pf"):
+        raise ValueError(f"not a PFM file (magic '{fields[0]}')")
+    w, h, scale = int(fields[1]), int(fields[2]), float(fields[3])
+    c = 3 if fields[0] == "PF" else 1
+    pixels = np.frombuffer(data, "<f4" if scale < 0 else ">f4", count=w * h * c, offset=pos)
+    img = pixels.reshape(h, w, c)[::-1].astype(np.float32)
+    return np.repeat(img, 3, axis=2) if c == 1 else img
+
+
+def _rgbe_scanline(data: bytes, pos: int, w: int) -> tuple[np.ndarray, int]:
+    """One scanline of RGBE pixels (w x 4 bytes) at data[pos:], flat or run-length encoded."""
+    rle = 8 <= w < 0x8000 and data[pos] == 2 and data[pos + 1] == 2 and not data[pos + 2] & 0x80
+    if not rle:  # flat (the old-style run format is not written by current tools: refused)
+        line = np.frombuffer(data, np.uint8, count=4 * w, offset=pos).reshape(w, 4)
+        if np.any(np.all(line[:, :3] == 1, axis=1)):
+            raise ValueError("old-style run-length encoded HDR is not supported")
+        return line, pos + 4 * w
+    if (data[pos + 2] << 8 | data[pos + 3]) != w:
+        raise ValueError("HDR scanline width mismatch")
+    pos += 4
+    line = np.empty((4, w), np.uint8)
+    for c in range(4):  # each channel's bytes as runs (count > 128: one value repeated) or literals
+        x = 0
+        while x < w:
+            count = data[pos]
+            if count > 128:
+                count -= 128
+                line[c, x:x + count] = data[pos + 1]
+                pos += 2
+            else:
+                if count == 0:
+                    raise ValueError("corrupt HDR run")
+                line[c, x:x + count] = np.frombuffer(data, np.uint8, count=count, offset=pos + 1)
+                pos += 1 + count
+            x += count
+        if x != w:
+            raise ValueError("corrupt HDR run")
+    return line.T, pos
+
+
+def read_hdr(path: str) -> np.ndarray:
+    """Radiance RGBE (.hdr): the header, a '-Y H +X W' resolution line (rows top to bottom), then
+    flat or run-length encoded scanlines; value = mantissa / 256 * 2^(exponent - 128)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if not (data.startswith(b"#?RADIANCE") or data.startswith(b"#?RGBE")):
+        raise ValueError("not a Radiance HDR file")
+    end = data.find(b"\n\n")
+    if end < 0:
+        raise ValueError("truncated HDR header")
+    for line in data[:end].split(b"\n"):
+        if line.startswith(b"FORMAT=") and line.strip() != b"FORMAT=32-bit_rle_rgbe":
+            raise ValueError(f"unsupported HDR {line.decode('ascii', 'replace')} (only 32-bit_rle_rgbe)")
+    nl = data.find(b"\n", end + 2)
+    res = data[end + 2:nl].split()
+    if len(res) != 4 or res[0] != b"-Y" or res[2] != b"+X":
+        raise ValueError(f"unsupported HDR orientation '{data[end + 2:nl].decode('ascii', 'replace')}' (only -Y H +X W)")
+    h, w = int(res[1]), int(res[3])
+    pos = nl + 1
+    rgbe = np.empty((h, w, 4), np.uint8)
+    for y in range(h):
+        rgbe[y], pos = _rgbe_scanline(data, pos, w)
+    e = rgbe[..., 3].astype(np.int32)
+    scale = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)  # 2^(e - 128) / 256
+    return (rgbe[..., :3] * scale[..., None]).astype(np.float32)
+
+
 def read_image(path: str, linearize_srgb: bool = True) -> np.ndarray:
-    """Any EXR, a .npy array (linear, H x W x 3), or an 8-bit image (sRGB-decoded unless
-    linearize_srgb is False), as float RGB."""
-    if path.lower().endswith(".exr"):
+    """Any EXR, Radiance .hdr, .pfm, a .npy array (linear, H x W x 3), or an 8-bit image
+    (sRGB-decoded unless linearize_srgb is False), as float RGB."""
+    lower = path.lower()
+    if lower.endswith(".exr"):
         return read_exr(path)
-    if path.lower().endswith(".npy"):
+    if lower.endswith(".hdr"):
+        return read_hdr(path)
+    if lower.endswith(".pfm"):
+        return read_pfm(path)
+    if lower.endswith(".npy"):
         return np.asarray(np.load(path), np.float32)
     from PIL import Image
 

@@ -13,6 +13,7 @@ import warnings
 from ..config import ConfigError
 from ..scene.builtin import BUILTIN_DESCRIPTIONS
 from ..scene.errors import SceneWarning
+from ..scene.scene import MISSING_TEXTURES
 
 # restir.validation.runs.DEFAULT_MAX_MDB as --max-mdb writes it (not imported: that pulls in scipy)
 DEFAULT_MAX_MDB = "5%"
@@ -77,8 +78,12 @@ def scene_argument(p, help="Mitsuba 3 XML file or builtin:NAME (listed below)", 
 
 
 def defines_option(p) -> None:
+    """The options that decide how the scene file is read: -D and --missing-textures."""
     p.add_argument("-D", dest="defines", action="append", type=key_value, default=[], metavar="NAME=VALUE",
                    help="override a scene <default> (as Mitsuba's -D)")
+    p.add_argument("--missing-textures", choices=MISSING_TEXTURES, default="error",
+                   help="a bitmap whose file is missing: stop (error, the default) or render it as constant "
+                        "grey 0.5 with a warning (grey)")
 
 
 def device_option(p) -> None:
@@ -187,13 +192,13 @@ def progress_bar(con, *columns):
                     console=con, transient=True)
 
 
-def load_scene(spec: str, defines, con):
+def load_scene(spec: str, defines, con, missing_textures: str = "error"):
     """api.load_scene with each SceneWarning said on `con` (one line each)."""
     from .. import api
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
-        scene = api.load_scene(spec, dict(defines) or None)
+        scene = api.load_scene(spec, dict(defines) or None, missing_textures=missing_textures)
     for w in caught:
         if issubclass(w.category, SceneWarning):
             say(con, str(w.message), "[yellow]warning:[/] ")

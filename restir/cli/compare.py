@@ -93,7 +93,7 @@ def run(args) -> int:
     if args.report:
         check_output_folder(args.report, "--report")
     tev = open_tev(args.tev)
-    scene = load_scene(args.scene, args.defines, con)
+    scene = load_scene(args.scene, args.defines, con, args.missing_textures)
     config = CompareConfig(reference=args.reference, reference_spp=args.reference_spp, equal_time=args.equal_time,
                            equal_spp=args.equal_spp, frames=args.frames, warmup=args.warmup, seed=args.seed,
                            width=args.width, height=args.height, max_depth=args.max_depth, device=args.device,

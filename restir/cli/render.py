@@ -84,7 +84,7 @@ def run(args) -> int:
     if args.write_frames:
         check_output_folder(args.write_frames, "--write-frames")
 
-    scene = load_scene(args.scene, args.defines, con)
+    scene = load_scene(args.scene, args.defines, con, args.missing_textures)
     with progress_bar(con, MofNCompleteColumn(), TimeRemainingColumn()) as bar:
         task = bar.add_task(f"{config.method} frames", total=config.frames)
         try:

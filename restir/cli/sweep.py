@@ -41,7 +41,7 @@ def run(args) -> int:
     con = console(args.quiet)
     points = parse_grid(args.grid, args.method)  # unknown settings and bad values: before any work
     check_output_folder(args.out, "--out")
-    scene = load_scene(args.scene, args.defines, con)
+    scene = load_scene(args.scene, args.defines, con, args.missing_textures)
     with progress_bar(con, MofNCompleteColumn()) as bar:
         task = bar.add_task("renders", total=len(points) * max(args.seeds, 1))
         result = sweep(scene, args.method, points, seeds=args.seeds, frames=args.frames, spp=args.spp,

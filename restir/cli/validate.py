@@ -112,7 +112,7 @@ def _validate_images(args) -> int:
         from ..validation import IndependentRuns
 
         h, w = images[0].shape[:2]
-        scene = load_scene(args.scene, args.defines, console())
+        scene = load_scene(args.scene, args.defines, console(), args.missing_textures)
         ref_cfg = RenderConfig(method="pt", spp=args.ref_spp, frames=args.frames, width=w, height=h,
                                max_depth=args.max_depth, device=args.device)
         runs = args.ref_runs or len(images)
@@ -142,7 +142,7 @@ def run(args) -> int:
             raise ConfigError(f"{option} {n}: at least 2 independent runs are needed")
     if args.zmap:
         check_output(args.zmap, "--zmap", tuple(IMAGE_FORMATS))
-    scene = load_scene(args.scene, args.defines, console())
+    scene = load_scene(args.scene, args.defines, console(), args.missing_textures)
     common = dict(frames=args.frames, width=args.width, height=args.height, device=args.device,
                   camera_motion=args.camera_motion, camera_speed=args.camera_speed)
     depth = args.max_depth

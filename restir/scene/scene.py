@@ -137,8 +137,15 @@ class Scene:
 
 
 # ----------------------------------------------------------------------------- builder
+MISSING_TEXTURES = ("error", "grey")  # what a bitmap whose file is missing becomes (load_scene's option)
+MISSING_GREY = 0.5
+
+
 class _Builder:
-    def __init__(self, tree: dict, name: str):
+    def __init__(self, tree: dict, name: str, missing_textures: str = "error"):
+        if missing_textures not in MISSING_TEXTURES:
+            raise SceneError(f"missing_textures must be one of {', '.join(MISSING_TEXTURES)}, not '{missing_textures}'")
+        self.missing_textures = missing_textures
         self.tree = tree
         self.name = name
         self.ids = tree.get("_ids", {})
@@ -409,9 +416,16 @@ class _Builder:
         else:
             fname = p.string("filename")
             path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
-            if not os.path.exists(path):
-                raise SceneError(f"texture file '{fname}' not found", p.loc)
-            img = _read_image(path, fname, p.loc, linearize_srgb=not p.bool("raw", False))
+            raw = p.bool("raw", False)
+            if os.path.exists(path):
+                img = _read_image(path, fname, p.loc, linearize_srgb=not raw)
+            elif self.missing_textures == "grey":
+                warn(f"texture file '{fname}' not found: rendered as constant grey {MISSING_GREY} "
+                     "(--missing-textures grey); the image is not the scene's", p.loc)
+                img = np.full((1, 1, 3), MISSING_GREY, np.float32)
+            else:
+                raise SceneError(f"texture file '{fname}' not found (--missing-textures grey renders it as grey "
+                                 "with a warning)", p.loc)
             t = TextureDesc("bitmap", to_uv, img, filter=self.choice(p, "filter_type", "bilinear", FILTERS),
                             wrap=self.choice(p, "wrap_mode", "repeat", WRAPS))
         p.warn_unqueried()
@@ -537,6 +551,7 @@ def _read_image(path: str, fname: str, loc: str, linearize_srgb: bool) -> np.nda
     return img
 
 
-def build_scene(tree: dict, name: str = "scene") -> Scene:
-    """Build a host Scene from a Mitsuba-style scene dict."""
-    return _Builder(tree, name).build()
+def build_scene(tree: dict, name: str = "scene", missing_textures: str = "error") -> Scene:
+    """Build a host Scene from a Mitsuba-style scene dict; `missing_textures` (MISSING_TEXTURES)
+    says what a bitmap whose file is missing becomes: an error, or constant grey with a warning."""
+    return _Builder(tree, name, missing_textures).build()

@@ -80,6 +80,20 @@ def test_unreadable_texture_is_an_error(tmp_path, capsys):
     assert "cannot read image 'bad.png'" in err and len(err.splitlines()) == 1
 
 
+def test_missing_texture_stops_or_renders_grey(tmp_path, capsys):
+    body = '<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">' \
+           '<string name="filename" value="rug.png"/></texture></bsdf></shape>'
+    p = write(tmp_path, MINIMAL.format(body=body))
+    assert main(["render", str(p), "--quiet", "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"{p}:5" in err and "texture file 'rug.png' not found" in err and "--missing-textures grey" in err, err
+    assert not (tmp_path / "x.exr").exists()
+    assert main(["render", str(p), "-o", str(tmp_path / "x.exr"), "--missing-textures", "grey", "--spp", "1"]) == 0
+    out = capsys.readouterr()
+    assert "rug.png' not found: rendered as constant grey 0.5" in out.out + out.err
+    assert (tmp_path / "x.exr").exists()
+
+
 def test_unknown_parameter_is_a_warning_with_location(tmp_path, capsys):
     p = write(tmp_path, MINIMAL.format(body='<shape type="rectangle"><float name="radiuss" value="1"/></shape>'))
     rc = main(["render", str(p), "-o", str(tmp_path / "x.exr"), "--quiet"])

@@ -140,3 +140,20 @@ def test_high_quality_edges_warns(tmp_path):
     text = V05.replace('<string name="pixelFormat" value="rgb"/>', '<boolean name="highQualityEdges" value="true"/>')
     with pytest.warns(UserWarning, match="high_quality_edges"):
         _load_text(tmp_path, "s.xml", text)
+
+
+def test_missing_texture_grey(tmp_path):
+    import pytest
+
+    from restir.scene.errors import SceneError
+
+    xml = _scene('<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" '
+                 'value="gone.png"/></texture></bsdf>')
+    (tmp_path / "scene.xml").write_text(xml)
+    with pytest.raises(SceneError, match="texture file 'gone.png' not found"):
+        restir.load_scene(str(tmp_path / "scene.xml"))
+    with pytest.warns(UserWarning, match="gone.png' not found: rendered as constant grey"):
+        scene = restir.load_scene(str(tmp_path / "scene.xml"), missing_textures="grey")
+    np.testing.assert_array_equal(scene.textures[0].image, np.full((1, 1, 3), 0.5, np.float32))
+    with pytest.raises(SceneError, match="missing_textures must be one of"):
+        restir.load_scene(str(tmp_path / "scene.xml"), missing_textures="pink")
