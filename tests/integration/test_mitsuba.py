@@ -17,6 +17,7 @@ Mitsuba flushes denormal floats to zero, so deviations below 1e-6 of the image m
 import json
 import pathlib
 
+import numpy as np
 import pytest
 
 import restir
@@ -26,12 +27,19 @@ from tests.shared_scenes import scene_path
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 FRAMES = 32
-SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256}
-MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01}
+SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256,
+       "veach-ajar": 256, "staircase2": 256}
+MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01,
+             "veach-ajar": 0.02, "staircase2": 0.02}
+# Tungsten's render of the same scene (as distributed with it): a cross-renderer check of the mean
+# only (its pixels are not resolved well enough, and the two renderers' colour handling differs a
+# little: Mitsuba 3's 64x36 reference is 0.5/1.2/1.5% above it in R/G/B)
+TUNGSTEN_TOL = 0.02
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures"])
+@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures", "veach-ajar",
+                                  "staircase2"])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
     if not meta_path.exists():
@@ -59,6 +67,11 @@ def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     print(name, f"ours {FRAMES}x{SPP[name]} spp, Mitsuba {meta['renders']}x{meta['spp_per_render']} spp")
     rep = check(Inner, ref[1:-1, 1:-1], ref_var[1:-1, 1:-1], rel_tol=1e-4, abs_tol=1e-6 * float(ref.mean()))
     assert rep.mdb < MDB_BOUND[name]
+    tungsten = None if scene_file is None else scene_file.parent / "reference-tungsten.exr"
+    if tungsten is not None and tungsten.exists():
+        ratio = r.image.mean(axis=(0, 1)) / read_exr(str(tungsten))[..., :3].mean(axis=(0, 1))
+        print(name, "mean / Tungsten's", ratio)
+        assert np.all(np.abs(ratio - 1) < TUNGSTEN_TOL), ratio
 
 
 @pytest.mark.slow
