@@ -5,7 +5,10 @@ time ratio).
 
 Each round renders the same frames in a fresh process for A, then for B (alternating, so machine
 load drifts affect both alike); compilation and one warm-up frame are excluded. Prints the
-medians and the ratio B/A.
+medians, the ratio B/A of the medians, the median of the rounds' ratios and the ratio of the
+fastest frames (noise only adds time, so on a busy machine the minimum is the steadier one).
+`--pin CORE` runs every process on that core (taskset), so the two sides never share it with
+their own threads.
 """
 import argparse
 import json
@@ -34,7 +37,8 @@ print(json.dumps({"file": restir.__file__, "ms": t}))
 def run(path, args):
     # the checkout's own package first: `python -c` puts the working folder ahead of everything
     env = dict(os.environ, PYTHONPATH=os.path.abspath(path))
-    out = subprocess.run([sys.executable, "-c", CHILD, args.scene, str(args.size), str(args.spp), str(args.frames),
+    pin = ["taskset", "-c", str(args.pin)] if args.pin is not None else []
+    out = subprocess.run(pin + [sys.executable, "-c", CHILD, args.scene, str(args.size), str(args.spp), str(args.frames),
                           args.settings, args.method], env=env, cwd=os.path.abspath(path), capture_output=True, text=True,
                          check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -51,15 +55,26 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--settings", default="{}", help="method settings as JSON")
     ap.add_argument("--method", default="pt")
+    ap.add_argument("--pin", type=int, default=None, help="run every process on this CPU core (taskset)")
+    ap.add_argument("--warmup", action="store_true", help="one untimed round first (fills both kernel caches)")
     args = ap.parse_args()
-    ms = {"a": [], "b": []}
-    for r in range(args.rounds):
+    if args.warmup:
         for side in ("a", "b"):
+            run(getattr(args, side), args)
+    ms = {"a": [], "b": []}
+    ratios = []
+    for r in range(args.rounds):
+        med = {}
+        for side in ("a", "b") if r % 2 == 0 else ("b", "a"):
             res = run(getattr(args, side), args)
             ms[side] += res["ms"]
-            print(f"round {r} {side} ({res['file']}): {statistics.median(res['ms']):.1f} ms/frame", flush=True)
+            med[side] = statistics.median(res["ms"])
+            print(f"round {r} {side} ({res['file']}): {med[side]:.1f} ms/frame", flush=True)
+        ratios.append(med["b"] / med["a"])
     ma, mb = statistics.median(ms["a"]), statistics.median(ms["b"])
-    print(f"median ms/frame  A {ma:.1f}  B {mb:.1f}  B/A {mb / ma:.3f}")
+    print(f"median ms/frame  A {ma:.1f}  B {mb:.1f}  B/A {mb / ma:.3f}; median of round ratios "
+          f"{statistics.median(ratios):.3f} (rounds {min(ratios):.3f}-{max(ratios):.3f}); fastest frames "
+          f"A {min(ms['a']):.1f} B {min(ms['b']):.1f} B/A {min(ms['b']) / min(ms['a']):.3f}")
 
 
 if __name__ == "__main__":

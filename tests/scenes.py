@@ -78,3 +78,36 @@ def feature_scene():
     from tests.data.feature_scene import write_feature_scene
 
     return restir.load_scene(write_feature_scene(tempfile.mkdtemp()))
+
+
+# one scene in both formats: the 0.5 text uses every rule of the upgrade
+V05 = """<scene version="0.5.0">
+    <integrator type="path"><integer name="maxDepth" value="7"/><integer name="rrDepth" value="3"/></integrator>
+    <sensor type="perspective"><float name="fov" value="40"/><string name="fovAxis" value="y"/>
+        <transform name="toWorld"><lookAt origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sampleCount" value="9"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+            <string name="pixelFormat" value="rgb"/></film>
+    </sensor>
+    <bsdf type="diffuse" id="checks"><texture type="checkerboard" name="diffuseReflectance">
+        <float name="uscale" value="4"/><float name="voffset" value="0.25"/></texture></bsdf>
+    <bsdf type="roughplastic" id="coat"><float name="intIOR" value="1.6"/><float name="extIOR" value="1.1"/>
+        <rgb name="diffuseReflectance" value="0.2, 0.3, 0.4"/><float name="alpha" value="0.2"/></bsdf>
+    <shape type="rectangle"><ref id="checks"/><transform name="toWorld"><translate x="0.5"/></transform></shape>
+    <shape type="rectangle"><ref name="bsdf" id="coat"/><boolean name="flipNormals" value="true"/></shape>
+</scene>"""
+V3 = """<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="7"/><integer name="rr_depth" value="3"/></integrator>
+    <sensor type="perspective"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
+        <transform name="to_world"><lookat origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="9"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+            <string name="pixel_format" value="rgb"/></film>
+    </sensor>
+    <bsdf type="diffuse" id="checks"><texture type="checkerboard" name="reflectance">
+        <transform name="to_uv"><translate y="0.25"/><scale x="4"/></transform></texture></bsdf>
+    <bsdf type="roughplastic" id="coat"><float name="int_ior" value="1.6"/><float name="ext_ior" value="1.1"/>
+        <rgb name="diffuse_reflectance" value="0.2, 0.3, 0.4"/><float name="alpha" value="0.2"/></bsdf>
+    <shape type="rectangle"><ref id="checks"/><transform name="to_world"><translate x="0.5"/></transform></shape>
+    <shape type="rectangle"><ref name="bsdf" id="coat"/><boolean name="flip_normals" value="true"/></shape>
+</scene>"""

@@ -76,11 +76,11 @@ def test_path_tracer_matches_mitsuba(device, name, tmp_path):
 
 @pytest.mark.slow
 def test_v05_twin_is_what_mitsuba_reads():
-    """tests/unit/test_loader.py checks that restir reads its 0.5 scene as the 3.0 twin; here Mitsuba
+    """tests/unit/test_loader.py checks that restir reads the 0.5 scene of tests/scenes.py as its 3.0 twin; here Mitsuba
     3 reads the two as the same scene (every traversed parameter equal), so the twin is Mitsuba's
     own upgrade. `<lookAt>` is written `<lookat>` for Mitsuba: 3.9.1 refuses the old element."""
     mi = pytest.importorskip("mitsuba")
-    from tests.unit.test_loader import V05, V3
+    from tests.scenes import V05, V3
 
     mi.set_variant("scalar_rgb")
     import re
