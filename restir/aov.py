@@ -16,7 +16,7 @@ import warp as wp
 from .config import AOVS
 from .device.camera import Camera, camera_ray
 from .device.intersect import T_MAX, trace_closest
-from .device.scene_device import SceneDevice, material_at
+from .device.scene_device import SceneDevice, textured_material
 from .device.types import MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC
 
 AOV_SAMPLES = 64
@@ -35,7 +35,7 @@ def aov_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32,
         wsum += ray.weight
         hit = trace_closest(scene, ray.o, ray.d, T_MAX)
         if hit.valid != 0:
-            m = material_at(scene, hit.tri, hit.uv)
+            m = textured_material(scene, hit.tri, hit.uv)
             r = m.reflectance
             if m.kind == MAT_CONDUCTOR or m.kind == MAT_ROUGHCONDUCTOR:
                 r = m.specular_reflectance

@@ -12,6 +12,7 @@ import numpy as np
 import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns, assert_matches
+from tests.scenes import bump_scene
 from tests.shared_scenes import scene_path
 
 
@@ -134,7 +135,12 @@ MATRIX_SCENES = {
     "veach-mis": (lambda: restir.load_scene(str(scene_path("veach-mis"))), 3, 0.06, 384, 32),
     "indirect-room": (lambda: restir.load_scene("builtin:indirect-room"), 5, 0.06, 64, 16),
     "sphere-cap": (lambda: restir.load_scene("builtin:sphere-cap", albedo=0.5, radiance=1.0, phi=0.05), 5, 0.01, 64, 8),
+    "bumps": (bump_scene, 5, 0.06, 64, 8),
 }
+# Scenes that get some of each matrix's configurations, named in the matrix files (the bump maps:
+# the cells whose shifts cross a tilted, wi-dependent shading frame); the rest get every one.
+PARTIAL_MATRIX_SCENES = ("bumps",)
+FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES if n not in PARTIAL_MATRIX_SCENES]
 # The path tracer's spp per frame in the references: 16, and 48 on veach-mis, whose MDB the
 # 16-spp reference set (5.8% on every configuration whatever the method's variance).
 MATRIX_REFERENCE_SPP = {"veach-mis": 48}

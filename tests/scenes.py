@@ -80,6 +80,22 @@ def feature_scene():
     return restir.load_scene(write_feature_scene(tempfile.mkdtemp()))
 
 
+def bump_scene():
+    """The bump-map scene (tests/data/feature_scene.py: bumpmap around five BSDFs, a mesh without
+    uvs), from a fresh temporary folder; its warning about Bitterli's unapplied wrapper (there
+    on purpose) silenced."""
+    import tempfile
+    import warnings
+
+    import restir
+    from restir.scene.errors import SceneWarning
+    from tests.data.feature_scene import write_bump_scene
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneWarning)
+        return restir.load_scene(write_bump_scene(tempfile.mkdtemp()))
+
+
 # one scene in both formats: the 0.5 text uses every rule of the upgrade
 V05 = """<scene version="0.5.0">
     <integrator type="path"><integer name="maxDepth" value="7"/><integer name="rrDepth" value="3"/></integrator>

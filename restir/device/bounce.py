@@ -11,13 +11,14 @@ s * DIMS_PER_SAMPLE; a path-reuse path has its own key and starts at 0).
 import warp as wp
 
 from .bsdf import Material
+from .bump import bump_normal, shadowing_alpha2
 from .color import max3
 from .intersect import SurfaceHit, offset_origin
 from .lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
 from .path_steps import LightConnection, Scatter, connect_to_light, scatter
 from .rng import rng_uniform, rng_uniform2
-from .sampling import Frame, frame_from_normal
-from .scene_device import SceneDevice
+from .sampling import Frame, frame_from_normal, to_local
+from .scene_device import SceneDevice, textured_material
 from .streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIMS_PER_BOUNCE
 from .types import ENV_NONE
 
@@ -30,10 +31,27 @@ def bounce_dim(k: int, slot: int) -> wp.uint32:
 
 
 @wp.func
-def shading_frame(scene: SceneDevice, hit: SurfaceHit) -> Frame:
-    """The frame the BSDF at a hit is evaluated in: the one place the shading normal is decided,
-    so every path loop, shift and target function sees the same one (a bump map perturbs it here)."""
-    return frame_from_normal(hit.ns)
+def shading_frame(scene: SceneDevice, hit: SurfaceHit, wi: wp.vec3) -> Frame:
+    """The frame the BSDF at a hit is evaluated in, wi (world) pointing back along the path: the
+    one place the shading normal is decided, so every path loop, shift and target function sees
+    the same one. A bump map tilts it (device/bump.py), which is where wi enters."""
+    b = scene.material_bump[scene.tri_material[hit.tri]]
+    if b.texture < 0:
+        return frame_from_normal(hit.ns)
+    return frame_from_normal(bump_normal(scene.positions, scene.uvs, scene.textures, scene.tex_pixels, b, hit.tri,
+                                         hit.uv, hit.ng, hit.ns, wi))
+
+
+@wp.func
+def material_at(scene: SceneDevice, hit: SurfaceHit, frame: Frame) -> Material:
+    """The material a BSDF at the hit is evaluated with, in `frame` (shading_frame's): textures
+    resolved (scene_device.textured_material) and, on a bump-mapped surface, the bump map's terms
+    for bsdf.py (the unperturbed normal in the tilted frame, the shadowing alpha^2)."""
+    m = textured_material(scene, hit.tri, hit.uv)
+    if m.bumped != 0:  # set in the scene's record of a bump-mapped material
+        m.bump_n0 = to_local(frame, hit.ns)
+        m.bump_alpha2 = shadowing_alpha2(m.bump_n0, scene.material_bump[scene.tri_material[hit.tri]].shadowing)
+    return m
 
 
 @wp.func(inline=True)

@@ -6,9 +6,11 @@ reuse asks of lobes. Conventions (Mitsuba's): `wi` points toward the previous ve
 side), `wo` is the scattered direction, both away from the surface; `bsdf_eval` returns
 f(wi, wo) * |cos theta_o|; `BSDFSample.weight` = eval / pdf. Delta lobes have eval = pdf = 0 and
 `is_delta` set. Radiance is scaled by 1/eta^2 on refraction (radiance transport, as Mitsuba).
+A bump-mapped material (device/bump.py) is evaluated in its tilted frame, which the caller's
+vectors are in, and eval takes the bump map's factor here, after the kind's value.
 
 Adding a material kind: a module in bsdfs/ with its eval, pdf, sample and LOBES, one line in
-each of `bsdf_eval`, `bsdf_pdf`, `kind_sample`, `bsdf_lobes` (and `smooth_lobe` if its non-delta
+each of `kind_eval`, `kind_pdf`, `kind_sample`, `bsdf_lobes` (and `smooth_lobe` if its non-delta
 lobes depend on the directions), its MAT_* constant in types.py, and its parameters in the
 loader (scene.py; a spectrum read with `spectrum()` is texturable with no device change).
 
@@ -28,6 +30,7 @@ from .bsdfs.material import BSDFSample, Material, flip_z, invalid_sample  # noqa
 from .bsdfs.plastic import (PLASTIC_LOBES, ROUGHPLASTIC_LOBES, plastic_eval, plastic_pdf, plastic_sample,
                             roughplastic_eval, roughplastic_pdf, roughplastic_pdf_parts, roughplastic_eval_parts,
                             roughplastic_sample)
+from .bump import bump_factor
 from .types import (
     LOBE_DIFFUSE_REFLECTION,
     LOBE_GLOSSY_REFLECTION,
@@ -50,7 +53,7 @@ from .types import (
 def to_front(mat: Material, wi: wp.vec3, v: wp.vec3) -> wp.vec3:
     """v as the front side sees it: a two-sided material hit from the back (wi below the
     surface) behaves as its front, so both directions are mirrored through the surface.
-    (bsdf_eval and bsdf_pdf spell this out inline: through this function, twice per call, the
+    (kind_eval and kind_pdf spell this out inline: through this function, twice per call, the
     path tracer ran about 5% slower on the CPU.)"""
     if mat.twosided != 0 and wi[2] < 0.0:
         return flip_z(v)
@@ -64,8 +67,10 @@ def to_front(mat: Material, wi: wp.vec3, v: wp.vec3) -> wp.vec3:
 # ReSTIR PT module took 171 s and Suffix ReSTIR's 295 s, out of line 42 s and 83 s (sm_90, 2 busy
 # cores). On the CPU the calls cost 1-2% of a frame (same-run A/B: pt 1.009, restir-pt 1.015,
 # suffix-restir 1.019).
-@wp.func(inline=False)
-def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
+@wp.func
+def kind_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
+    """The kind's f * |cos|, a two-sided material hit from the back mirrored to its front. Each
+    branch returns (see kind_sample)."""
     wi = wi_in
     wo = wo_in
     if mat.twosided != 0 and wi[2] < 0.0:
@@ -84,8 +89,8 @@ def bsdf_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
     return wp.vec3(0.0)  # delta-only kinds
 
 
-@wp.func(inline=False)
-def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
+@wp.func
+def kind_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
     wi = wi_in
     wo = wo_in
     if mat.twosided != 0 and wi[2] < 0.0:
@@ -102,6 +107,23 @@ def bsdf_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
     if mat.kind == MAT_ROUGHPLASTIC:
         return roughplastic_pdf(mat, wi, wo)
     return 0.0  # delta-only kinds
+
+
+@wp.func(inline=False)
+def bsdf_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
+    f = kind_eval(mat, wi, wo)
+    if mat.bumped != 0:
+        f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo)
+    return f
+
+
+@wp.func(inline=False)
+def bsdf_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
+    p = kind_pdf(mat, wi, wo)
+    if mat.bumped != 0:
+        if bump_factor(mat.bump_n0, 0.0, wo) == 0.0:
+            p = 0.0
+    return p
 
 
 @wp.func
@@ -141,18 +163,24 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
     if flipped:
         wi = flip_z(wi)
     s = kind_sample(mat, wi, u_lobe, u)
+    if flipped:
+        s.wo = flip_z(s.wo)  # back in the caller's frame, where bsdf_pdf and bsdf_eval take it
     if s.lobe != 0 and s.is_delta == 0:
         # Directions on the wrong side (or where the lobe is zero) have pdf or eval 0: invalid.
-        s.pdf = bsdf_pdf(mat, wi, s.wo)
+        s.pdf = bsdf_pdf(mat, wi_in, s.wo)
         if s.pdf > 0.0:
-            f = bsdf_eval(mat, wi, s.wo)
+            f = bsdf_eval(mat, wi_in, s.wo)
             if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
                 s.weight = f / s.pdf
                 s.valid = 1
+    elif s.valid != 0 and mat.bumped != 0:
+        # a delta lobe's weight takes the bump map's factor as eval does (Mitsuba's bumpmap sample)
+        b = bump_factor(mat.bump_n0, mat.bump_alpha2, s.wo)
+        s.weight = s.weight * b
+        if b <= 0.0:
+            s.valid = 0
     if s.valid == 0:
         s.lobe = 0
-    if flipped:
-        s.wo = flip_z(s.wo)
     return s
 
 
@@ -201,7 +229,10 @@ def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
 def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
     """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        return roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        f = roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        if mat.bumped != 0:
+            f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo_in)
+        return f
     if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
         return wp.vec3(0.0)
     return bsdf_eval(mat, wi_in, wo_in)
@@ -212,7 +243,11 @@ def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) ->
     """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
     sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        return roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        p = roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        if mat.bumped != 0:
+            if bump_factor(mat.bump_n0, 0.0, wo_in) == 0.0:
+                p = 0.0
+        return p
     if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
         return 0.0
     return bsdf_pdf(mat, wi_in, wo_in)

@@ -6,6 +6,7 @@ normals and uvs need no second index buffer.
 import warp as wp
 
 from .bsdf import Material
+from .bump import Bump
 from .textures import Texture, texture_eval
 
 
@@ -26,6 +27,7 @@ class SceneDevice:
     # per material, the texture index of reflectance, specular_reflectance, specular_transmittance
     # (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
     material_textures: wp.array(dtype=wp.vec3i)
+    material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
     # Emissive triangles, chosen in proportion to power by a Walker alias table.
     light_tri: wp.array(dtype=wp.int32)
     light_prob: wp.array(dtype=float)
@@ -55,10 +57,11 @@ def texture_or_constant(scene: SceneDevice, tex: int, uv: wp.vec2, constant: wp.
 
 
 @wp.func
-def material_at(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
+def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     """The triangle's material with textured parameters resolved at uv: the one place textures
     are read (a BSDF sees constants), so a parameter becomes texturable here and in the loader
-    (scene.py `spectrum`), not in every material kind."""
+    (scene.py `spectrum`), not in every material kind. What a BSDF is evaluated with is
+    bounce.material_at's, which adds the bump map's terms to this."""
     i = scene.tri_material[tri]
     m = scene.materials[i]
     tex = scene.material_textures[i]

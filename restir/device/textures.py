@@ -1,6 +1,7 @@
 """Textures on the device: Mitsuba 3's `bitmap` (nearest or bilinear lookup; repeat, mirror or clamp
 wrapping) and `checkerboard`, each with its `to_uv` transform; one `texture_eval` for every
-textured parameter (scene_device.material_at is its only caller, so a BSDF never reads one).
+textured parameter (scene_device.textured_material is its only caller, so a BSDF never reads one), and
+`texture_grad1`, the uv gradient of a bitmap's luminance that a bump map (device/bump.py) reads.
 """
 import warp as wp
 
@@ -83,3 +84,43 @@ def texture_eval(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.ve
     if t.kind == TEX_CHECKERBOARD:
         return checkerboard_eval(t, uv)
     return bitmap_eval(t, texels, uv)
+
+
+@wp.func
+def height_of(c: wp.vec3) -> float:
+    """A bump map's height from an RGB texel: Mitsuba's `luminance` (its exact Rec. 709 weights,
+    which color.luminance rounds to four digits)."""
+    return 0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2]
+
+
+@wp.func
+def texture_grad1(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), tex: int,
+                  surface_uv: wp.vec2) -> wp.vec2:
+    """d height / d(u, v) of a bilinear bitmap at the surface's uv (Mitsuba's `eval_1_grad`): the
+    exact derivative of the bilinear interpolant of the four texels' heights, by the chain rule
+    through `to_uv`. Nearest filtering has gradient 0 almost everywhere (as in Mitsuba); the loader
+    refuses a checkerboard, whose gradient is 0 or undefined everywhere."""
+    t = textures[tex]
+    if t.filter == TEX_FILTER_NEAREST:
+        return wp.vec2(0.0)
+    q = t.to_uv * wp.vec3(surface_uv[0], surface_uv[1], 1.0)
+    x = q[0] * float(t.width) - 0.5
+    y = q[1] * float(t.height) - 0.5
+    x0 = wp.floor(x)
+    y0 = wp.floor(y)
+    fx = x - x0
+    fy = y - y0
+    xi = int(x0)
+    yi = int(y0)
+    f00 = height_of(bitmap_texel(t, texels, xi, yi))
+    f10 = height_of(bitmap_texel(t, texels, xi + 1, yi))
+    f01 = height_of(bitmap_texel(t, texels, xi, yi + 1))
+    f11 = height_of(bitmap_texel(t, texels, xi + 1, yi + 1))
+    # per texel along x and y, then texels per unit of the texture's uv, then the surface's uv
+    # (Mitsuba scales both components by (width, height) after the to_uv product, which differs
+    # from this only when to_uv mixes u and v on a non-square image: docs/scenes.md)
+    df_dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01)
+    df_dy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10)
+    gx = df_dx * float(t.width)
+    gy = df_dy * float(t.height)
+    return wp.vec2(t.to_uv[0, 0] * gx + t.to_uv[1, 0] * gy, t.to_uv[0, 1] * gx + t.to_uv[1, 1] * gy)

@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 import warp as wp
 
-from ..device.bounce import bounce_dim, nee_at, scatter_at, shading_frame
+from ..device.bounce import bounce_dim, material_at, nee_at, scatter_at, shading_frame
 from ..device.bsdf import bsdf_is_delta_only
 from ..device.camera import Camera, camera_ray
 from ..device.color import max3
@@ -29,7 +29,7 @@ from ..device.lights import env_eval, env_pdf, triangle_emission, triangle_light
 from ..device.path_steps import emission_mis_weight, rr_survival_probability
 from ..device.rng import rng_key, rng_uniform
 from ..device.sampling import to_local
-from ..device.scene_device import SceneDevice, material_at
+from ..device.scene_device import SceneDevice
 from ..device.streams import DIM_RR, DIMS_PER_SAMPLE, MAX_NEE_SAMPLES, MAX_SEGMENTS, STAGE_PATH_NEE, STAGE_PATH_TRACE
 from ..device.types import ENV_NONE, STRATEGY_BSDF, STRATEGY_MIS, STRATEGY_NEE
 from ..film import Welford, welford_add
@@ -100,8 +100,8 @@ def make_path_trace_kernel(several_light_samples: bool):
                 L += wp.cw_mul(beta, Le) * w
             if depth + 1 >= max_depth:
                 break
-            mat = material_at(scene, hit.tri, hit.uv)
-            frame = shading_frame(scene, hit)
+            frame = shading_frame(scene, hit, -d)
+            mat = material_at(scene, hit, frame)
             wi = to_local(frame, -d)
             dim = base + bounce_dim(depth, 0)  # this vertex's numbers (device/bounce.py; RR below)
             # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B)

@@ -10,6 +10,8 @@ with D_wi the visible-normal density, wo_r / wo_t the reflected / refracted dire
 right side of the surface). Integrated by quadrature over microfacet normals, with the polar
 angle mapped by tan(theta) = alpha tan(u) so the lobe is resolved for any alpha.
 """
+import functools
+
 import numpy as np
 
 TABLE_SIZE = 64
@@ -77,7 +79,15 @@ def albedos(kind: str, alpha: float, eta: float, mu: np.ndarray, n_theta=384, n_
 
 
 def roughplastic_tables(kind: str, alpha: float, eta: float) -> tuple[np.ndarray, float]:
-    """External transmittance table (TABLE_SIZE) and internal reflectance, as Mitsuba defines them."""
+    """External transmittance table (TABLE_SIZE) and internal reflectance, as Mitsuba defines them.
+    Computed once per (kind, alpha, eta) in a process (a quadrature of about 1 s: Bitterli's
+    staircase has six roughplastics with two parameter sets)."""
+    t_ext, internal_reflectance = _tables(kind, float(alpha), float(eta))
+    return t_ext.copy(), internal_reflectance
+
+
+@functools.lru_cache(maxsize=None)
+def _tables(kind: str, alpha: float, eta: float) -> tuple[np.ndarray, float]:
     mu = np.maximum(1e-6, np.linspace(0, 1, TABLE_SIZE))
     _, t_ext = albedos(kind, alpha, eta, mu)
     r_int, _ = albedos(kind, alpha, 1.0 / eta, mu)

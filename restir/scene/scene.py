@@ -13,7 +13,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided"},
+             "roughplastic", "twosided", "bumpmap"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
     "emitter": {"area", "constant", "envmap"},
     "sensor": {"perspective"},
@@ -36,8 +36,17 @@ IOR_TABLE = {
 
 
 # The spectra a texture may drive, in the order of SceneDevice.material_textures' components; the
-# loader reads each with `spectrum()` and the device resolves it in `material_at`.
+# loader reads each with `spectrum()` and the device resolves it in `scene_device.textured_material`.
 TEXTURED_PARAMETERS = ("reflectance", "specular_reflectance", "specular_transmittance")
+
+
+@dataclass
+class BumpDesc:
+    """Mitsuba 3's `bumpmap` around a material (device/bump.py): its height texture's index."""
+    texture: int
+    scale: float = 1.0
+    flip_invalid_normals: bool = True
+    use_shadowing_function: bool = True
 
 
 @dataclass
@@ -58,6 +67,7 @@ class MaterialDesc:
     fdr_int: float = 0.0
     nonlinear: bool = False
     coat_transmittance: np.ndarray | None = None
+    bump: BumpDesc | None = None
 
 
 def fresnel_diffuse_reflectance(eta: float) -> float:
@@ -151,6 +161,7 @@ class _Builder:
         self.ids = tree.get("_ids", {})
         self.base_dir = tree.get("_base_dir", os.getcwd())
         self.materials: list[MaterialDesc] = []
+        self.bump_wrappers: list[dict] = []  # top-level bumpmaps (a warning if only their BSDF is used)
         self.material_index: dict[int, int] = {}
         self.textures: list[TextureDesc] = []
         self.parts: list[tuple] = []
@@ -192,9 +203,12 @@ class _Builder:
             elif kind == "integrator":
                 self.integrator(obj)
             elif kind in ("bsdf", "texture"):
-                pass  # declared with an id for reference; built when a shape uses it
+                # declared with an id for reference; built when a shape uses it
+                if obj.get("type") == "bumpmap":
+                    self.bump_wrappers.append(obj)
             else:
                 raise SceneError(f"a {kind} cannot appear at the top level", obj.get("_loc"))
+        self.warn_unapplied_bumps()
         if self.camera is None:
             raise SceneError("the scene has no <sensor>", self.tree.get("_loc"))
         if not self.parts:
@@ -299,19 +313,60 @@ class _Builder:
         if key in self.material_index:
             return self.material_index[key]
         p = self.props(obj, "bsdf")
+        bump = None
+        if p.type == "bumpmap":
+            bump, obj = self.bumpmap(p)
+            p = self.props(obj, "bsdf")
         if p.type == "twosided":
             inner = p.children()
             if len(inner) != 1:
                 raise SceneError("twosided needs exactly one nested BSDF (two different sides are not supported)", p.loc)
             m = self.material_desc(inner[0])
             m.twosided = True
+            p.warn_unqueried()
         else:
             m = self.material_desc(obj)
-        if p.type == "twosided":
-            p.warn_unqueried()
+        m.bump = bump
         self.materials.append(m)
         self.material_index[key] = len(self.materials) - 1
         return self.material_index[key]
+
+    def bumpmap(self, p: Props) -> tuple[BumpDesc, dict]:
+        """Mitsuba 3's `bumpmap`: exactly one height texture and one BSDF (which may be a twosided;
+        Bitterli's scenes wrap one). Returns the bump map and the BSDF's object."""
+        kids = p.children()
+        textures = [c for c in kids if self.kind_of(c) == "texture"]
+        bsdfs = [c for c in kids if self.kind_of(c) == "bsdf"]
+        if len(bsdfs) != 1 or len(textures) != 1 or len(kids) != 2:
+            raise SceneError("bumpmap needs exactly one nested BSDF and one texture (its height map)", p.loc)
+        tex, inner = textures[0], bsdfs[0]
+        if inner.get("type") == "bumpmap":
+            raise SceneError("nested bumpmap BSDFs are not supported", inner.get("_loc", p.loc))
+        if tex.get("type") == "checkerboard":
+            raise SceneError("a bumpmap's height map must be a bitmap: a checkerboard has no gradient",
+                             tex.get("_loc", p.loc))
+        b = BumpDesc(self.texture(tex), scale=p.float("scale", 1.0),
+                     flip_invalid_normals=p.bool("flip_invalid_normals", True),
+                     use_shadowing_function=p.bool("use_shadowing_function", True))
+        if self.textures[b.texture].filter == "nearest":
+            warn("bumpmap: a height map with filter_type 'nearest' has gradient 0 almost everywhere, so the "
+                 "surface renders flat (as in Mitsuba 3)", tex.get("_loc", p.loc))
+        p.warn_unqueried()
+        return b, inner
+
+    def warn_unapplied_bumps(self) -> None:
+        """Bitterli's scenes declare `<bsdf type="bumpmap"> ... <bsdf type="twosided" id="X">` and
+        let shapes refer to X: the shapes then get X without the bump, in Mitsuba 3 as here (its
+        renders, measured: the same image as with no bumpmap at all). Said, since the file's
+        author meant a bump."""
+        for obj in self.bump_wrappers:
+            if id(obj) in self.material_index:
+                continue
+            for inner in Props(obj, self.ids).children():
+                if (inner.get("_kind") or TYPE_TO_KIND.get(inner.get("type"))) == "bsdf" and id(inner) in self.material_index:
+                    warn(f"this bumpmap is not applied: shapes refer to the BSDF '{inner.get('id', '?')}' inside it, "
+                         "not to the bumpmap, and get it without the bump, as in Mitsuba 3 (to apply the bump, "
+                         "give the bumpmap an id and refer to that)", obj.get("_loc"))
 
     def ior(self, p: Props, name: str, default: float) -> float:
         if not p.has(name):
@@ -330,6 +385,9 @@ class _Builder:
         m = MaterialDesc(kind=t)
         if t == "twosided":
             raise SceneError("nested twosided BSDFs are not supported", p.loc)
+        if t == "bumpmap":
+            raise SceneError("a bumpmap inside a twosided is not supported: put the twosided inside the bumpmap "
+                             "(as Bitterli's scenes do)", p.loc)
         if t == "diffuse":
             self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))
         if t in ("conductor", "roughconductor"):
@@ -393,7 +451,7 @@ class _Builder:
 
     def spectrum(self, p: Props, m: MaterialDesc, name: str, param: str, default: np.ndarray) -> float:
         """The RGB parameter `name` of the BSDF into the material's `param` (a constant, or a
-        texture index that the device resolves at each hit: scene_device.material_at); returns
+        texture index that the device resolves at each hit: scene_device.textured_material); returns
         its mean value (of the texture's texels if textured), which sampling weights use."""
         v = p.color_or_texture(name, default)
         if isinstance(v, dict):
@@ -463,7 +521,7 @@ class _Builder:
             mesh = shape_lib.disk()
         elif t == "trimesh":  # restir extension for builtin scenes: inline vertices and faces
             mesh = shape_lib.TriMesh(np.asarray(p.obj["vertices"], float)[np.asarray(p.obj["faces"])], None,
-                                     np.zeros((len(p.obj["faces"]), 3, 2)))
+                                     shape_lib.barycentric_uvs(len(p.obj["faces"])))
             p.queried.update(("vertices", "faces"))
 
         else:

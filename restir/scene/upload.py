@@ -3,6 +3,7 @@ import numpy as np
 import warp as wp
 
 from ..device.bsdf import Material
+from ..device.bump import Bump
 from ..device.camera import Camera
 from ..device.scene_device import SceneDevice
 from ..device.textures import (TEX_BITMAP, TEX_CHECKERBOARD, TEX_FILTER_BILINEAR, TEX_FILTER_NEAREST, TEX_WRAP_CLAMP,
@@ -39,8 +40,20 @@ def material_struct(m, device="cpu") -> Material:
     s.specular_sampling_weight = float(m.specular_sampling_weight)
     s.fdr_int = float(m.fdr_int)
     s.nonlinear = int(m.nonlinear)
+    s.bumped = int(m.bump is not None)
     table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
     s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
+    return s
+
+
+def bump_struct(b) -> Bump:
+    """A material's bump map (scene.BumpDesc or None) as the device reads it (device/bump.py)."""
+    s = Bump()
+    s.texture = -1 if b is None else int(b.texture)
+    if b is not None:
+        s.scale = float(b.scale)
+        s.flip_invalid = int(b.flip_invalid_normals)
+        s.shadowing = int(b.use_shadowing_function)
     return s
 
 
@@ -94,6 +107,7 @@ class DeviceScene:
         self._arrays.append(s.materials)
         s.material_textures = self._arr(np.array([[m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
                                                   for m in sc.materials], np.int32).reshape(-1, 3), wp.vec3i)
+        s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
 
         power = sc.light_power()
         lights = np.nonzero(power > 0)[0].astype(np.int32)

@@ -6,7 +6,13 @@
   a checkerboard with `to_uv` on a rough conductor's specular_reflectance (Veach Ajar's floor),
   bitmaps with nearest and bilinear filtering, repeat, mirror and clamp wrapping and `to_uv`, on
   diffuse, plastic (diffuse and specular reflectance) and thindielectric (transmittance), all on
-  rectangles (whose uv both renderers define alike).
+  rectangles (whose uv both renderers define alike);
+- `write_bump_scene`: bump maps (`bumpmap`) as Bitterli's scenes use them and beyond: around a
+  twosided rough plastic (the bathroom's floor), a diffuse, a mirror (a delta lobe), a twosided
+  diffuse seen from its back with flip_invalid_normals and the shadowing term off, and a mesh
+  without texture coordinates (barycentric uvs); grey (8-bit, sRGB) and coloured (luminance)
+  height maps with `scale` and `to_uv`; and Bitterli's unreferenced wrapper, whose bump neither
+  renderer applies.
 
 Both the Mitsuba reference generator and the test call them, so they render identical inputs.
 `SCENES` names them.
@@ -160,4 +166,91 @@ def write_texture_scene(directory: str) -> str:
     return path
 
 
-SCENES = {"features": write_feature_scene, "textures": write_texture_scene}
+def _bump_map(tex: str, scale: float | None = None, extra: str = "") -> str:
+    s = "" if scale is None else f'<float name="scale" value="{scale}"/>'
+    return f'<texture name="map" type="bitmap"><string name="filename" value="{tex}"/>{extra}</texture>{s}'
+
+
+BUMP_SCENE = _header("55", "0.3, 1.7, -4", "0, 0.6, 0") + f"""    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="bumpmap">{_bump_map("tiles.png", 0.08, '<transform name="to_uv"><scale value="2"/></transform>')}
+            <bsdf type="twosided"><bsdf type="roughplastic"><float name="alpha" value="0.2"/>
+                <string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.5, 0.45, 0.4"/>
+            </bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="3" y="1.5"/><rotate y="1" angle="180"/><translate y="1.5" z="2"/></transform>
+        <bsdf type="bumpmap">{_bump_map("waves.png", 0.3)}
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.55"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="1.5" y="1.5"/><rotate y="1" angle="-90"/><translate x="-2.2" y="1.5"/></transform>
+        <bsdf type="bumpmap">{_bump_map("waves.png", 0.5)}
+            <boolean name="flip_invalid_normals" value="false"/><boolean name="use_shadowing_function" value="false"/>
+            <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.5, 0.7"/></bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.6" y="0.5"/><rotate y="1" angle="200"/><translate x="1.3" y="0.8" z="0.5"/></transform>
+        <bsdf type="bumpmap">{_bump_map("waves.png", 0.05)}
+            <bsdf type="conductor"><rgb name="eta" value="0.2, 0.92, 1.1"/><rgb name="k" value="3.9, 2.45, 2.14"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="tent.obj"/>
+        <transform name="to_world"><scale value="0.5"/><translate x="-0.8" y="0.01" z="-0.4"/></transform>
+        <bsdf type="bumpmap">{_bump_map("tiles.png", 0.02, '<transform name="to_uv"><scale value="3"/></transform>')}
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf>
+        </bsdf>
+    </shape>
+    <bsdf type="bumpmap">{_bump_map("tiles.png")}
+        <bsdf type="twosided" id="unapplied"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf></bsdf>
+    </bsdf>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.5" y="0.4"/><translate x="0.4" y="0.4" z="1.2"/></transform>
+        <ref id="unapplied"/>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="90"/><translate x="0.5" y="3" z="-0.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="9, 8, 7"/></emitter>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="0.1, 0.12, 0.15"/></emitter>
+</scene>
+"""
+
+# a four-sided tent without texture coordinates: its uvs are each triangle's barycentrics
+TENT_OBJ = """v -1 0 -1
+v 1 0 -1
+v 1 0 1
+v -1 0 1
+v 0 1.2 0
+f 1 5 2
+f 2 5 3
+f 3 5 4
+f 4 5 1
+"""
+
+
+def write_bump_scene(directory: str) -> str:
+    from PIL import Image
+
+    os.makedirs(directory, exist_ok=True)
+    y, x = (np.mgrid[0:32, 0:32] + 0.5) / 8.0
+    fx, fy = x - np.floor(x), y - np.floor(y)  # 8x8-texel tiles, grout at their edges
+    tile = np.clip(np.minimum(np.minimum(fx, 1 - fx), np.minimum(fy, 1 - fy)) * 6.0, 0.0, 1.0)
+    Image.fromarray((40 + 200 * tile).astype(np.uint8), mode="L").save(os.path.join(directory, "tiles.png"))
+    v, u = (np.mgrid[0:24, 0:40] + 0.5) / np.array([24.0, 40.0])[:, None, None]
+    waves = np.stack([0.5 + 0.5 * np.sin(2 * np.pi * (3 * u + v)), 0.5 + 0.4 * np.sin(2 * np.pi * 2 * v),
+                      0.5 + 0.5 * np.cos(2 * np.pi * (u - 2 * v))], -1)
+    Image.fromarray((255 * waves).astype(np.uint8)).save(os.path.join(directory, "waves.png"))
+    with open(os.path.join(directory, "tent.obj"), "w") as f:
+        f.write(TENT_OBJ)
+    path = os.path.join(directory, "scene.xml")
+    with open(path, "w") as f:
+        f.write(BUMP_SCENE)
+    return path
+
+
+SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bumps": write_bump_scene}

@@ -11,7 +11,8 @@ per channel at image, tile (8x8) and pixel level, alpha = 1e-3 per configuration
 Scenes: the feature scene (environment map, textures, glossy and rough-glass materials), the
 half-dark scene (about half of all light candidates are zero: C6, the target of defects A1 and
 A3), the shadow scene (a large light behind blinds: visibility differs from pixel to pixel) and
-the glossy Cornell box (GGX and Beckmann surfaces under a small light).
+the glossy Cornell box (GGX and Beckmann surfaces under a small light); and the bump-map scene
+(tests/data/feature_scene.py) with the cells of BUMP_CELLS.
 """
 import functools
 import tempfile
@@ -21,7 +22,7 @@ import pytest
 import restir
 from restir.validation import IndependentRuns
 from tests.helpers import check
-from tests.scenes import half_dark_scene, shadow_scene
+from tests.scenes import bump_scene, half_dark_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
 
@@ -68,6 +69,8 @@ def scene(name):
         return half_dark_scene()
     if name == "shadow":
         return shadow_scene()
+    if name == "bumps":
+        return bump_scene()
     if name == "features":
         from tests.data.feature_scene import write_feature_scene
 
@@ -97,3 +100,14 @@ def test_restir_di_matrix(name, config):
     print(name, config, settings, f"K={RUNS} T={FRAMES} {SIZE}x{SIZE}", "counters", di.counters)
     rep = check(di, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
     assert rep.mdb < 0.08
+
+
+# on the bump-map scene (tests/data/feature_scene.py): candidates alone, each reuse, unshadowed
+# targets, the defaults and a moving camera
+BUMP_CELLS = ["C1-light-32-bsdf-1", "C2-cap-20", "C3-k4-rounds-3", "C4-defaults", "C4-unshadowed", "C4-orbit"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", BUMP_CELLS)
+def test_restir_di_matrix_on_bump_maps(config):
+    test_restir_di_matrix("bumps", config)

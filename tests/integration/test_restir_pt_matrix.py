@@ -12,13 +12,13 @@ tile (8x8) and pixel level, alpha = 1e-3 per configuration; the MDB (80% power, 
 printed and bounded per scene (the emissive-cap sphere has an exact reference instead).
 
 Scenes: the glossy Cornell box, veach-bidir and veach-mis (shared scenes), the emissive-cap
-sphere (A1) and the indirect room (light hidden from the camera, glossy surfaces).
+sphere (A1) and the indirect room (light hidden from the camera, glossy surfaces); and the bump-map
+scene (tests/data/feature_scene.py) with the cells of BUMP_CELLS.
 """
 
 import pytest
 
-from tests.helpers import MATRIX_SCENES as SCENES
-from tests.helpers import run_cell
+from tests.helpers import FULL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
@@ -42,10 +42,23 @@ MATRIX = {
 }
 
 
+# on the bump-map scene: every shift, spatial rounds, temporal reuse, the defaults and a moving camera
+BUMP_CELLS = ["C1-candidates-1", "C3-hybrid-k3", "C3-reconnection-k3", "C3-replay-k3", "C3-hybrid-k3-rounds-2",
+              "C2-cap-20", "C4-defaults", "C4-orbit"]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("config", list(MATRIX))
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", FULL_MATRIX_SCENES)
 def test_restir_pt_matrix(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
     run_cell(name, "restir-pt", settings, motion, config)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", BUMP_CELLS)
+def test_restir_pt_matrix_on_bump_maps(config):
+    settings, motion = MATRIX[config]
+    print(config, end=" ")
+    run_cell("bumps", "restir-pt", settings, motion, config)

@@ -7,13 +7,13 @@ Configurations: the final gather alone (prefix and suffix reuse off) for N in {1
 and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
 reconnection and replay shifts; direct=pt; the pairwise gather; prefixes ending exactly at x3
-(non-adaptive); a canonical suffix for every prefix; the fixed search radius. Welch z per channel at image,
+(non-adaptive); a canonical suffix for every prefix; the fixed search radius; on the bump-map
+scene, the cells of BUMP_CELLS. Welch z per channel at image,
 tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 
-from tests.helpers import MATRIX_SCENES as SCENES
-from tests.helpers import run_cell
+from tests.helpers import FULL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 MATRIX = {
@@ -35,10 +35,23 @@ MATRIX = {
 }
 
 
+# on the bump-map scene: the gather alone, each reuse, the shifts and a moving camera
+BUMP_CELLS = ["C5-gather-N2-M4", "C5-prefix-temporal", "C5-suffix-spatial", "C5-all", "C5-reconnection", "C5-replay",
+              "C5-orbit"]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("config", list(MATRIX))
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", FULL_MATRIX_SCENES)
 def test_suffix_restir_matrix(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
     run_cell(name, "suffix-restir", settings, motion, config)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", BUMP_CELLS)
+def test_suffix_restir_matrix_on_bump_maps(config):
+    settings, motion = MATRIX[config]
+    print(config, end=" ")
+    run_cell("bumps", "suffix-restir", settings, motion, config)

@@ -20,7 +20,7 @@ from restir.device.microfacet import microfacet_sample_to_square
 from restir.device.path_steps import scatter
 from restir.device.rng import rng_uniform, rng_uniform2
 from restir.device.sampling import cosine_hemisphere_to_square, frame_from_normal, to_local
-from restir.device.scene_device import SceneDevice, material_at
+from restir.device.scene_device import SceneDevice, textured_material
 from restir.device.streams import DIM_BSDF_DIR, DIM_BSDF_LOBE
 from restir.device.types import LOBE_DIFFUSE_REFLECTION, MAT_PLASTIC, MAT_ROUGHPLASTIC
 from restir.integrators.common.gbuffer import GBuffer
@@ -258,7 +258,7 @@ def make_fd_kernel(shift, replay_prefix):
         mat_z_kind = int(-1)
         if kind == RC_SURFACE:
             z = surface_at(scene, r.rc_tri, r.rc_bary[0], r.rc_bary[1], 0.0)
-            mat_z = material_at(scene, z.tri, z.uv)
+            mat_z = textured_material(scene, z.tri, z.uv)  # (no bump maps in its scenes)
             mat_z_kind = mat_z.kind
             if z_factor:
                 fz = frame_from_normal(z.ns)

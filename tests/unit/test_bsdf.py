@@ -87,6 +87,16 @@ def direction(theta_deg, phi_deg=30.0, below=False):
     return v.astype(np.float32)
 
 
+def bumped(m, tilt_deg, shadowing=True):
+    """m under a bump map whose normal is tilted by tilt_deg from ns (bump_n0: ns in the tilted
+    frame), as bounce.material_at sets it; the BSDF then carries bump.bump_factor."""
+    t = np.radians(tilt_deg)
+    m.bumped = 1
+    m.bump_n0 = wp.vec3(float(np.sin(t)), 0.0, float(np.cos(t)))
+    m.bump_alpha2 = float(min(0.125 * np.tan(t) ** 2, 1.0)) if shadowing else 0.0
+    return m
+
+
 SMOOTH_CASES = [
     ("diffuse", material(MAT_DIFFUSE), direction(40)),
     ("diffuse-twosided-back", material(MAT_DIFFUSE, twosided=1), direction(40, below=True)),
@@ -104,6 +114,13 @@ SMOOTH_CASES = [
     ("plastic-grazing", material(MAT_PLASTIC, ior=1.49), direction(85)),
     ("roughplastic-ggx", material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), direction(40)),
     ("roughplastic-beckmann-grazing", material(MAT_ROUGHPLASTIC, (0.3, 0.3), MICROFACET_BECKMANN, ior=1.49), direction(80)),
+    # bump-mapped (the tilted frame's zero region and the shadowing term; wo with phi = 180 deg
+    # from the tilt falls between the two surfaces first)
+    ("bumped-diffuse", bumped(material(MAT_DIFFUSE), 35), direction(40)),
+    ("bumped-diffuse-twosided-back", bumped(material(MAT_DIFFUSE, twosided=1), 30), direction(40, below=True)),
+    ("bumped-roughplastic", bumped(material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), 25), direction(60, 200)),
+    ("bumped-roughdielectric-inside", bumped(material(MAT_ROUGHDIELECTRIC, (0.3, 0.3)), 20, False),
+     direction(25, below=True)),
 ]
 
 

@@ -125,3 +125,40 @@ def test_missing_texture_grey(tmp_path):
     np.testing.assert_array_equal(scene.textures[0].image, np.full((1, 1, 3), 0.5, np.float32))
     with pytest.raises(SceneError, match="missing_textures must be one of"):
         restir.load_scene(str(tmp_path / "scene.xml"), missing_textures="pink")
+
+
+def test_a_mesh_without_uvs_has_barycentric_uvs(tmp_path):
+    """Mitsuba 3's uv on a mesh without texture coordinates is the hit's barycentrics (b1, b2):
+    (0, 0), (1, 0), (0, 1) at each triangle's corners, a quad's fan included; with vt, the file's."""
+    (tmp_path / "a.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    (tmp_path / "b.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nf 1/1 2/2 3/3\n")
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.xml").write_text(_scene("").replace(
+            '<shape type="rectangle"></shape>', f'<shape type="obj"><string name="filename" value="{name}.obj"/></shape>'))
+    a = restir.load_scene(str(tmp_path / "a.xml"))
+    np.testing.assert_array_equal(a.uvs.reshape(-1, 3, 2), [[[0, 0], [1, 0], [0, 1]]] * 2)
+    b = restir.load_scene(str(tmp_path / "b.xml"))
+    # OBJ's v is flipped (1 - v), as Mitsuba reads it
+    np.testing.assert_allclose(b.uvs.reshape(-1, 3, 2), [[[0.1, 0.8], [0.3, 0.6], [0.5, 0.4]]], atol=1e-6)
+
+
+def test_the_two_obj_readers_agree():
+    """load_obj's numpy reader of regular files gives the line reader's mesh, array for array,
+    and leaves every irregular file (negative indices, mixed corner formats, v with w) to it."""
+    from restir.scene.shapes import _read_obj_lines, _read_obj_regular
+
+    body = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n# a comment\ng part\n"
+    regular = [body + "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/1/1\n",
+               body + "f 1 2 3 4\n",
+               body + "f 1//1 2//1 3//1 4//1\n",
+               body + "f 1/1 2/2 3/3\ns off\nf 4/1 1/2 3/3\n"]
+    for text in regular:
+        fast, slow = _read_obj_regular(text), _read_obj_lines(text, "t.obj")
+        assert fast is not None, text
+        for a, b in zip(fast, slow):
+            np.testing.assert_array_equal(a, b)
+    irregular = [body + "f -4 -3 -2\n", body + "f 1/1 2 3/3/1\n", "v 0 0 0 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+                 body + "f 1 2 9\n", body + "f 0 1 2\n", body + "  f 1 2 3\n",
+                 body + "vt 0 1 0\nf 1 2 3\n"]
+    for text in irregular:
+        assert _read_obj_regular(text) is None, text

@@ -1,9 +1,9 @@
 """Textured BSDF parameters: a bitmap on any parameter the loader reads as a spectrum reaches the
-BSDFs through the one texture-or-constant lookup (scene_device.material_at), and only that
+BSDFs through the one texture-or-constant lookup (scene_device.textured_material), and only that
 parameter changes.
 
 Each case loads a one-rectangle scene whose BSDF has a 2x2 raw (linear) PNG on one parameter,
-uploads it as a render does, and reads `material_at` on the device at each texel's centre, where
+uploads it as a render does, and reads `textured_material` on the device at each texel's centre, where
 the bilinear lookup returns the texel exactly. Deterministic (no statistics): the looked-up values
 must equal the texels to float32 rounding, and every other spectrum must keep its constant.
 """
@@ -12,7 +12,7 @@ import pytest
 import warp as wp
 
 import restir
-from restir.device.scene_device import SceneDevice, material_at
+from restir.device.scene_device import SceneDevice, textured_material
 from restir.scene.scene import TEXTURED_PARAMETERS
 from restir.scene.upload import DeviceScene
 
@@ -51,7 +51,7 @@ CASES = [
 @wp.kernel
 def lookup_kernel(scene: SceneDevice, uvs: wp.array(dtype=wp.vec2), out: wp.array(dtype=wp.vec3, ndim=2)):
     i = wp.tid()
-    m = material_at(scene, 0, uvs[i])
+    m = textured_material(scene, 0, uvs[i])
     out[i, 0] = m.reflectance
     out[i, 1] = m.specular_reflectance
     out[i, 2] = m.specular_transmittance

@@ -12,5 +12,5 @@ mirrors two-sided materials hit from the back before calling them. A kind's `*_s
 lobe and the direction; for a delta lobe it also sets the pdf and the weight, and every other
 sample is weighted by the dispatcher with the kind's own eval and pdf (so weight = eval / pdf
 holds by construction). Parameters arrive resolved
-(textures already looked up by `scene_device.material_at`), so a kind never reads a texture.
+(textures already looked up by `scene_device.textured_material`), so a kind never reads a texture.
 """

@@ -14,7 +14,7 @@ class Material:
     kind: int
     twosided: int              # 1: the back side behaves as the front (Mitsuba `twosided`)
     # Texturable (scene.py TEXTURED_PARAMETERS): a textured one is overwritten at each hit by
-    # scene_device.material_at before any BSDF reads it; the texture indices live beside the
+    # scene_device.textured_material before any BSDF reads it; the texture indices live beside the
     # materials (SceneDevice.material_textures), not in this record, which is copied by value.
     reflectance: wp.vec3       # diffuse albedo
     specular_reflectance: wp.vec3
@@ -31,6 +31,11 @@ class Material:
     fdr_int: float             # reflectance of the coat for diffuse light from inside
     nonlinear: int
     coat_transmittance: wp.array(dtype=float)  # roughplastic: T(cos) at cos = i/63 (scene/coat_tables.py)
+    # A bump map (device/bump.py): `bumped` is set in the scene's record of a bump-mapped material,
+    # the other two per hit by bounce.material_at; bsdf.py multiplies eval by bump.bump_factor.
+    bumped: int
+    bump_n0: wp.vec3           # the unperturbed shading normal ns in the tilted frame
+    bump_alpha2: float         # the terminator-shadowing alpha^2 (0: no shadowing)
 
 
 @wp.struct

@@ -2,10 +2,10 @@
 import warp as wp
 
 from ...device.bsdf import Material
-from ...device.bounce import shading_frame
+from ...device.bounce import material_at, shading_frame
 from ...device.intersect import SurfaceHit, surface_at
 from ...device.sampling import Frame, to_local
-from ...device.scene_device import SceneDevice, material_at
+from ...device.scene_device import SceneDevice
 from .gbuffer import GBuffer
 
 
@@ -28,8 +28,8 @@ def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
         return s
     b = gb.bary[pixel]
     s.hit = surface_at(scene, tri, b[0], b[1], gb.t[pixel])
-    s.mat = material_at(scene, tri, s.hit.uv)
-    s.frame = shading_frame(scene, s.hit)
+    s.frame = shading_frame(scene, s.hit, -gb.dir[pixel])
+    s.mat = material_at(scene, s.hit, s.frame)
     s.wi = to_local(s.frame, -gb.dir[pixel])
     s.valid = 1
     return s

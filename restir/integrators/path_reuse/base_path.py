@@ -16,13 +16,13 @@ the part up to and including rcPrev's bounce (beta) and the part after z's own b
 """
 import warp as wp
 
-from ...device.bounce import found_along, nee_at, scatter_at, shading_frame
+from ...device.bounce import found_along, material_at, nee_at, scatter_at, shading_frame
 from ...device.bsdf import bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, trace_closest
 from ...device.path_steps import emission_mis_weight
 from ...device.rng import rng_uniform
-from ...device.scene_device import SceneDevice, material_at
+from ...device.scene_device import SceneDevice
 from ...device.sampling import to_local
 from ...device.streams import PT_RIS_DIM_EMISSION, PT_RIS_DIM_NEE, PT_RIS_DIMS_PER_VERTEX
 from ...device.types import STRATEGY_MIS
@@ -173,8 +173,8 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
         jac_in = jac_next
         dist_in = dist
         hit = nh
-        mat = material_at(scene, hit.tri, hit.uv)
-        frame = shading_frame(scene, hit)
+        frame = shading_frame(scene, hit, -sc.d)
+        mat = material_at(scene, hit, frame)
         wi = to_local(frame, -sc.d)
         k += 1
     return out

@@ -30,14 +30,14 @@ Warp module of its own; the shipped shift (`shift_path`) is built with none.
 """
 import warp as wp
 
-from ...device.bounce import found_along, nee_at, scatter_at, segment, shading_frame
+from ...device.bounce import found_along, material_at, nee_at, scatter_at, segment, shading_frame
 from ...device.bsdf import Material, bsdf_eval, bsdf_is_delta_only, bsdf_pdf, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, is_visible, offset_origin, surface_at, trace_closest, visible_to_light
 from ...device.lights import env_eval, env_pdf, triangle_emission
 from ...device.path_steps import emission_mis_weight
 from ...device.sampling import Frame, to_local
-from ...device.scene_device import SceneDevice, material_at
+from ...device.scene_device import SceneDevice
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
@@ -132,8 +132,8 @@ def make_shift(mutation: str = "none"):
             y.prev_rough = wp.where(lobe_is_rough(y.mat, sc.bs.lobe, params.rough_threshold), 1, 0)
             y.dist_in = segment(y.hit.p, y.hit.ng, nh.p)[3]
             y.hit = nh
-            y.mat = material_at(scene, nh.tri, nh.uv)
-            y.frame = shading_frame(scene, nh)
+            y.frame = shading_frame(scene, nh, -sc.d)
+            y.mat = material_at(scene, nh, y.frame)
             y.wi = to_local(y.frame, -sc.d)
             k += 1
         return y
@@ -237,8 +237,8 @@ def make_shift(mutation: str = "none"):
                 F = wp.cw_mul(w_y, Le) * mis
                 jac = wp.vec2(G * e.p, 1.0)
             else:
-                mat_z = material_at(scene, z.tri, z.uv)
-                frame_z = shading_frame(scene, z)
+                frame_z = shading_frame(scene, z, -w1)
+                mat_z = material_at(scene, z, frame_z)
                 wi_z = to_local(frame_z, -w1)
                 wo_z = to_local(frame_z, r.rc_wi)
                 if ends_with_nee(flags) != 0 and path_length(flags) == rcl:

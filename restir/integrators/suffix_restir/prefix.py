@@ -12,13 +12,13 @@ Prefix numbers are rng_uniform(seed, bounce_dim(k, slot)) at bounce k, as a ReST
 """
 import warp as wp
 
-from ...device.bounce import found_along, nee_at, scatter_at, segment, shading_frame
+from ...device.bounce import found_along, material_at, nee_at, scatter_at, segment, shading_frame
 from ...device.bsdf import Material, bsdf_has_rough_component, bsdf_is_delta_only, bsdf_pdf_lobes, lobe_is_rough
 from ...device.color import luminance, max3
 from ...device.intersect import T_MAX, SurfaceHit, trace_closest, visible_to_light
 from ...device.path_steps import emission_mis_weight
 from ...device.sampling import to_local
-from ...device.scene_device import SceneDevice, material_at
+from ...device.scene_device import SceneDevice
 from ...device.types import STRATEGY_MIS
 from ...resampling.ris import is_finite
 from ..common.shading import Shading
@@ -90,7 +90,8 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
                                                                          STRATEGY_MIS)
         if fd.is_env != 0:
             break
-        mat_next = material_at(scene, nh.tri, nh.uv)
+        frame_next = shading_frame(scene, nh, -sc.d)
+        mat_next = material_at(scene, nh, frame_next)
         out.footprint += fd.dist
         if prefix_ends_at(params, k + 1, rough, mat_next, fd.dist):
             out.valid = 1
@@ -106,7 +107,7 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
             return out
         hit = nh
         mat = mat_next
-        frame = shading_frame(scene, nh)
+        frame = frame_next
         wi = to_local(frame, -sc.d)
         k += 1
     return out
@@ -119,8 +120,8 @@ def prefix_end_shading(scene: SceneDevice, p: Prefix) -> Shading:
     s.valid = p.valid
     if p.valid != 0:
         s.hit = p.hit
-        s.mat = material_at(scene, p.hit.tri, p.hit.uv)
-        s.frame = shading_frame(scene, p.hit)
+        s.frame = shading_frame(scene, p.hit, -p.dir)
+        s.mat = material_at(scene, p.hit, s.frame)
         s.wi = to_local(s.frame, -p.dir)
     return s
 
@@ -214,13 +215,14 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
         if nh.valid == 0 or max3(beta) <= 0.0:
             return res
         seg = segment(hit.p, hit.ng, nh.p)
-        mat_next = material_at(scene, nh.tri, nh.uv)
+        frame_next = shading_frame(scene, nh, -sc.d)
+        mat_next = material_at(scene, nh, frame_next)
         if prefix_ends_at(params, k + 1, lobe_is_rough(mat, sc.bs.lobe, params.pt.rough_threshold), mat_next, seg[3]):
             return res  # the destination's prefix would end here, before x_P
         footprint += seg[3]
         hit = nh
         mat = mat_next
-        frame = shading_frame(scene, nh)
+        frame = frame_next
         wi = to_local(frame, -sc.d)
         k += 1
     # reconnect x_{P-1} -> x_P with the recorded lobe: the destination's prefix must end at x_P too

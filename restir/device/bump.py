@@ -1,0 +1,93 @@
+"""Bump mapping as Mitsuba 3's `bumpmap` BSDF does it: a texture's luminance is a height field
+over the surface's uv, and its gradient tilts the shading normal; the wrapped BSDF is evaluated
+in the tilted frame, with two more factors that make it a BSDF of the unperturbed surface.
+
+- `bump_normal`: the tilted normal n at a hit. With dp/du, dp/dv the triangle's tangents (from
+  its corner uvs; the Duff basis of ng where the uvs are degenerate) and g = scale * grad h,
+  dp/du' = dp/du + ns (g_u - ns . dp/du), likewise dp/dv', and n = normalize(dp/du' x dp/dv'),
+  turned to ng's side. `flip_invalid_normals` (Mitsuba's default): where wi lies on different
+  sides of ns and n, n is mirrored about ns, so the camera side always sees the front.
+- `bump_factor`: directions wo on different sides of ns and n carry nothing (Mitsuba's
+  `cos_theta(wo) * cos_theta(perturbed wo) > 0`), and with `use_shadowing_function` (default)
+  the rest is weighted by Estevez et al.'s terminator shadowing, 2 / (1 + sqrt(1 + a2 tan^2)),
+  tan measured from ns, a2 = min(tan^2(n, ns) / 8, 1). The factor multiplies eval (so a sample's
+  weight) and its zero region zeroes the pdf; bsdf.py applies it, from the material's `bump_n0`
+  (ns in the tilted frame) and `bump_alpha2`, which bounce.material_at fills at each hit.
+
+Only ns, n and wi decide the frame, so a path, its replay and every shift through the vertex see
+one BSDF: the frame is a function of the hit and wi alone (bounce.shading_frame).
+"""
+import warp as wp
+
+from .sampling import frame_from_normal
+from .textures import Texture, texture_grad1
+
+
+@wp.struct
+class Bump:
+    """A material's bump map (SceneDevice.material_bump, one per material)."""
+    texture: int        # the height texture; -1: not bump-mapped
+    scale: float        # Mitsuba's `scale`: heights are multiplied by it
+    flip_invalid: int   # Mitsuba's `flip_invalid_normals`
+    shadowing: int      # Mitsuba's `use_shadowing_function`
+
+
+@wp.func
+def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2), textures: wp.array(dtype=Texture),
+                texels: wp.array(dtype=wp.vec3), b: Bump, tri: int, uv: wp.vec2, ng: wp.vec3, ns: wp.vec3,
+                wi: wp.vec3) -> wp.vec3:
+    """The tilted shading normal at a hit (triangle, uv, geometric and shading normals; the
+    hit's fields, passed apart since SurfaceHit's module needs SceneDevice, which holds a Bump),
+    wi (world, toward the previous vertex) deciding the flip of an invalid one."""
+    i0 = 3 * tri
+    dp0 = positions[i0 + 1] - positions[i0]
+    dp1 = positions[i0 + 2] - positions[i0]
+    duv0 = uvs[i0 + 1] - uvs[i0]
+    duv1 = uvs[i0 + 2] - uvs[i0]
+    det = duv0[0] * duv1[1] - duv0[1] * duv1[0]
+    dp_du = wp.vec3(0.0)
+    dp_dv = wp.vec3(0.0)
+    if det != 0.0:
+        inv_det = 1.0 / det
+        dp_du = (duv1[1] * dp0 - duv0[1] * dp1) * inv_det
+        dp_dv = (duv0[0] * dp1 - duv1[0] * dp0) * inv_det
+    else:
+        f = frame_from_normal(ng)
+        dp_du = f.s
+        dp_dv = f.t
+    g = b.scale * texture_grad1(textures, texels, b.texture, uv)
+    du = dp_du + ns * (g[0] - wp.dot(ns, dp_du))
+    dv = dp_dv + ns * (g[1] - wp.dot(ns, dp_dv))
+    c = wp.cross(du, dv)
+    lc = wp.length(c)
+    if lc <= 0.0:
+        return ns
+    n = c / lc
+    if wp.dot(ng, n) < 0.0:
+        n = -n
+    if b.flip_invalid != 0 and wp.dot(wi, ns) * wp.dot(wi, n) <= 0.0:
+        n = 2.0 * wp.dot(n, ns) * ns - n
+    return n
+
+
+@wp.func
+def shadowing_alpha2(n0: wp.vec3, shadowing: int) -> float:
+    """Estevez et al.'s alpha^2 from the angle between the two normals (n0: ns in the tilted
+    frame, whose cosine to n is n0.z); 0 (no shadowing) when the bump map turns it off."""
+    if shadowing == 0:
+        return 0.0
+    c2 = n0[2] * n0[2]
+    return wp.min(0.125 * wp.max(0.0, 1.0 - c2) / c2, 1.0)
+
+
+@wp.func
+def bump_factor(n0: wp.vec3, alpha2: float, wo: wp.vec3) -> float:
+    """What the bump map multiplies f(wi, wo) |cos| by, wo in the tilted frame: 0 where wo lies on
+    different sides of n and ns, else the shadowing term (1 without it)."""
+    c0 = wp.dot(wo, n0)
+    if c0 * wo[2] <= 0.0:
+        return 0.0
+    if alpha2 == 0.0:
+        return 1.0
+    tan2 = wp.max(0.0, 1.0 - c0 * c0) / (c0 * c0)
+    return 2.0 / (1.0 + wp.sqrt(1.0 + alpha2 * tan2))
