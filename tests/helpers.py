@@ -12,7 +12,7 @@ import numpy as np
 import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns, assert_matches
-from tests.scenes import bump_scene
+from tests.scenes import bump_scene, mask_scene
 from tests.shared_scenes import scene_path
 
 
@@ -136,18 +136,23 @@ MATRIX_SCENES = {
     "indirect-room": (lambda: restir.load_scene("builtin:indirect-room"), 5, 0.06, 64, 16),
     "sphere-cap": (lambda: restir.load_scene("builtin:sphere-cap", albedo=0.5, radiance=1.0, phi=0.05), 5, 0.01, 64, 8),
     "bumps": (bump_scene, 5, 0.06, 64, 8),
+    "masks": (mask_scene, 5, 0.06, 64, 8),
 }
 # Scenes that get some of each matrix's configurations, named in the matrix files (the bump maps:
 # the cells whose shifts cross a tilted, wi-dependent shading frame); the rest get every one.
-PARTIAL_MATRIX_SCENES = ("bumps",)
+PARTIAL_MATRIX_SCENES = ("bumps", "masks")
 FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES if n not in PARTIAL_MATRIX_SCENES]
 # The path tracer's spp per frame in the references: 16, and 48 on veach-mis, whose MDB the
 # 16-spp reference set (5.8% on every configuration whatever the method's variance).
 MATRIX_REFERENCE_SPP = {"veach-mis": 48}
 # Configurations whose tails need more runs than their scene's K (measured MDB at the scene's K):
 # direct=pt in the indirect room (7.3% at 64 x 16), the orbiting camera in veach-bidir (ReSTIR
-# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32).
-MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384}
+# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32); ReSTIR PT's defaults on the masks, whose per-run
+# means are heavy-tailed (light through the blinds is found by BSDF sampling only; excess kurtosis
+# about 6): at 64 x 8 one tile read z = 5.45 (crit 4.93) while the image passed (z -0.5), and two
+# replicates with fresh seeds passed (max tile |z| 2.04 and 2.31; VALIDATION.md).
+MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
+               ("masks", "C4-defaults"): 128}
 
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):

@@ -96,6 +96,17 @@ def bump_scene():
         return restir.load_scene(write_bump_scene(tempfile.mkdtemp()))
 
 
+def mask_scene():
+    """The opacity-mask scene (tests/data/feature_scene.py: masks by texture and constant, around a
+    bump map and two conductors), from a fresh temporary folder."""
+    import tempfile
+
+    import restir
+    from tests.data.feature_scene import write_mask_scene
+
+    return restir.load_scene(write_mask_scene(tempfile.mkdtemp()))
+
+
 # one scene in both formats: the 0.5 text uses every rule of the upgrade
 V05 = """<scene version="0.5.0">
     <integrator type="path"><integer name="maxDepth" value="7"/><integer name="rrDepth" value="3"/></integrator>

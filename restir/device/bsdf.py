@@ -7,7 +7,9 @@ side), `wo` is the scattered direction, both away from the surface; `bsdf_eval` 
 f(wi, wo) * |cos theta_o|; `BSDFSample.weight` = eval / pdf. Delta lobes have eval = pdf = 0 and
 `is_delta` set. Radiance is scaled by 1/eta^2 on refraction (radiance transport, as Mitsuba).
 A bump-mapped material (device/bump.py) is evaluated in its tilted frame, which the caller's
-vectors are in, and eval takes the bump map's factor here, after the kind's value.
+vectors are in, and eval takes the bump map's factor here, after the kind's value. A masked one
+(Mitsuba 3's `mask`) is the blend opacity * (the kind) + (1 - opacity) * (the null lobe, straight
+through): eval and pdf take the factor opacity here, and `bsdf_sample` picks the null lobe.
 
 Adding a material kind: a module in bsdfs/ with its eval, pdf, sample and LOBES, one line in
 each of `kind_eval`, `kind_pdf`, `kind_sample`, `bsdf_lobes` (and `smooth_lobe` if its non-delta
@@ -26,7 +28,7 @@ from .bsdfs.conductor import CONDUCTOR_LOBES, ROUGHCONDUCTOR_LOBES, conductor_sa
 from .bsdfs.dielectric import (DIELECTRIC_LOBES, ROUGHDIELECTRIC_LOBES, dielectric_sample, roughdielectric_eval,
                                roughdielectric_pdf, roughdielectric_sample, thindielectric_sample)
 from .bsdfs.diffuse import DIFFUSE_LOBES, diffuse_eval, diffuse_pdf, diffuse_sample
-from .bsdfs.material import BSDFSample, Material, flip_z, invalid_sample  # noqa: F401  (the BSDF interface)
+from .bsdfs.material import BSDFSample, Material, flip_z, invalid_sample, null_sample  # noqa: F401  (the BSDF interface)
 from .bsdfs.plastic import (PLASTIC_LOBES, ROUGHPLASTIC_LOBES, plastic_eval, plastic_pdf, plastic_sample,
                             roughplastic_eval, roughplastic_pdf, roughplastic_pdf_parts, roughplastic_eval_parts,
                             roughplastic_sample)
@@ -35,6 +37,7 @@ from .types import (
     LOBE_DIFFUSE_REFLECTION,
     LOBE_GLOSSY_REFLECTION,
     LOBE_GLOSSY_TRANSMISSION,
+    LOBE_NULL,
     LOBES_DELTA,
     LOBES_DIFFUSE,
     LOBES_GLOSSY,
@@ -111,7 +114,7 @@ def kind_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
 
 @wp.func(inline=False)
 def bsdf_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
-    f = kind_eval(mat, wi, wo)
+    f = kind_eval(mat, wi, wo) * mat.opacity
     if mat.bumped != 0:
         f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo)
     return f
@@ -119,7 +122,7 @@ def bsdf_eval(mat: Material, wi: wp.vec3, wo: wp.vec3) -> wp.vec3:
 
 @wp.func(inline=False)
 def bsdf_pdf(mat: Material, wi: wp.vec3, wo: wp.vec3) -> float:
-    p = kind_pdf(mat, wi, wo)
+    p = kind_pdf(mat, wi, wo) * mat.opacity
     if mat.bumped != 0:
         if bump_factor(mat.bump_n0, 0.0, wo) == 0.0:
             p = 0.0
@@ -157,12 +160,16 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
     A kind's sample function picks the direction and the lobe; for a delta lobe it also sets the
     pdf and weight. Every non-delta sample is weighted here, by `bsdf_pdf` and `bsdf_eval`: the
     same functions NEE and MIS use, so a sample's weight is eval / pdf by construction and one
-    out-of-line call of each serves every kind."""
+    out-of-line call of each serves every kind. A mask passes through when u_lobe >= opacity and
+    otherwise hands the kind u_lobe / opacity (Mitsuba's order; for opacity 1 both are exact
+    no-ops)."""
+    if u_lobe >= mat.opacity:
+        return null_sample(wi_in, 1.0 - mat.opacity)
     wi = wi_in
     flipped = mat.twosided != 0 and wi[2] < 0.0
     if flipped:
         wi = flip_z(wi)
-    s = kind_sample(mat, wi, u_lobe, u)
+    s = kind_sample(mat, wi, u_lobe / mat.opacity, u)
     if flipped:
         s.wo = flip_z(s.wo)  # back in the caller's frame, where bsdf_pdf and bsdf_eval take it
     if s.lobe != 0 and s.is_delta == 0:
@@ -173,12 +180,14 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
             if f[0] > 0.0 or f[1] > 0.0 or f[2] > 0.0:
                 s.weight = f / s.pdf
                 s.valid = 1
-    elif s.valid != 0 and mat.bumped != 0:
-        # a delta lobe's weight takes the bump map's factor as eval does (Mitsuba's bumpmap sample)
-        b = bump_factor(mat.bump_n0, mat.bump_alpha2, s.wo)
-        s.weight = s.weight * b
-        if b <= 0.0:
-            s.valid = 0
+    else:
+        s.pdf = s.pdf * mat.opacity  # a delta lobe's probability of being chosen, the mask's included
+        if s.valid != 0 and mat.bumped != 0:
+            # a delta lobe's weight takes the bump map's factor as eval does (Mitsuba's bumpmap sample)
+            b = bump_factor(mat.bump_n0, mat.bump_alpha2, s.wo)
+            s.weight = s.weight * b
+            if b <= 0.0:
+                s.valid = 0
     if s.valid == 0:
         s.lobe = 0
     return s
@@ -186,7 +195,12 @@ def bsdf_sample(mat: Material, wi_in: wp.vec3, u_lobe: float, u: wp.vec2) -> BSD
 
 @wp.func
 def bsdf_lobes(mat: Material) -> int:
-    """The lobes (LOBE_* mask) the material's kind has."""
+    """The lobes (LOBE_* mask) the material has: its kind's, and a mask's null lobe."""
+    return kind_lobes(mat) | wp.where(mat.masked != 0, LOBE_NULL, 0)
+
+
+@wp.func
+def kind_lobes(mat: Material) -> int:
     if mat.kind == MAT_DIFFUSE:
         return DIFFUSE_LOBES
     if mat.kind == MAT_CONDUCTOR:
@@ -229,7 +243,7 @@ def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
 def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
     """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        f = roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        f = roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes) * mat.opacity
         if mat.bumped != 0:
             f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo_in)
         return f
@@ -243,7 +257,7 @@ def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) ->
     """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
     sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
     if mat.kind == MAT_ROUGHPLASTIC:
-        p = roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes)
+        p = roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes) * mat.opacity
         if mat.bumped != 0:
             if bump_factor(mat.bump_n0, 0.0, wo_in) == 0.0:
                 p = 0.0

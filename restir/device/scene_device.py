@@ -7,7 +7,7 @@ import warp as wp
 
 from .bsdf import Material
 from .bump import Bump
-from .textures import Texture, texture_eval
+from .textures import Texture, scalar_of, texture_eval
 
 
 @wp.struct
@@ -24,9 +24,9 @@ class SceneDevice:
     tri_emission: wp.array(dtype=wp.vec3)  # area-emitter radiance (front side), 0 if not emissive
     tri_light_pdf: wp.array(dtype=float)   # P(select triangle) / area: NEE density in area measure
     materials: wp.array(dtype=Material)
-    # per material, the texture index of reflectance, specular_reflectance, specular_transmittance
-    # (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
-    material_textures: wp.array(dtype=wp.vec3i)
+    # per material, the texture index of reflectance, specular_reflectance, specular_transmittance,
+    # opacity (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
+    material_textures: wp.array(dtype=wp.vec4i)
     material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
     # Emissive triangles, chosen in proportion to power by a Walker alias table.
     light_tri: wp.array(dtype=wp.int32)
@@ -68,4 +68,6 @@ def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     m.reflectance = texture_or_constant(scene, tex[0], uv, m.reflectance)
     m.specular_reflectance = texture_or_constant(scene, tex[1], uv, m.specular_reflectance)
     m.specular_transmittance = texture_or_constant(scene, tex[2], uv, m.specular_transmittance)
+    if tex[3] >= 0:  # a mask's opacity: the texture's eval_1, clipped to [0, 1] as in Mitsuba
+        m.opacity = wp.clamp(scalar_of(texture_eval(scene.textures, scene.tex_pixels, tex[3], uv)), 0.0, 1.0)
     return m

@@ -87,9 +87,10 @@ def texture_eval(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.ve
 
 
 @wp.func
-def height_of(c: wp.vec3) -> float:
-    """A bump map's height from an RGB texel: Mitsuba's `luminance` (its exact Rec. 709 weights,
-    which color.luminance rounds to four digits)."""
+def scalar_of(c: wp.vec3) -> float:
+    """A scalar parameter from an RGB texel, as Mitsuba's `eval_1` reads an RGB texture: its
+    `luminance` (the exact Rec. 709 weights, which color.luminance rounds to four digits). A bump
+    map's height, a mask's opacity."""
     return 0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2]
 
 
@@ -112,10 +113,10 @@ def texture_grad1(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.v
     fy = y - y0
     xi = int(x0)
     yi = int(y0)
-    f00 = height_of(bitmap_texel(t, texels, xi, yi))
-    f10 = height_of(bitmap_texel(t, texels, xi + 1, yi))
-    f01 = height_of(bitmap_texel(t, texels, xi, yi + 1))
-    f11 = height_of(bitmap_texel(t, texels, xi + 1, yi + 1))
+    f00 = scalar_of(bitmap_texel(t, texels, xi, yi))
+    f10 = scalar_of(bitmap_texel(t, texels, xi + 1, yi))
+    f01 = scalar_of(bitmap_texel(t, texels, xi, yi + 1))
+    f11 = scalar_of(bitmap_texel(t, texels, xi + 1, yi + 1))
     # per texel along x and y, then texels per unit of the texture's uv, then the surface's uv
     # (Mitsuba scales both components by (width, height) after the to_uv product, which differs
     # from this only when to_uv mixes u and v on a non-square image: docs/scenes.md)

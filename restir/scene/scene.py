@@ -13,7 +13,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided", "bumpmap"},
+             "roughplastic", "twosided", "bumpmap", "mask"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
     "emitter": {"area", "constant", "envmap"},
     "sensor": {"perspective"},
@@ -35,9 +35,10 @@ IOR_TABLE = {
 }
 
 
-# The spectra a texture may drive, in the order of SceneDevice.material_textures' components; the
-# loader reads each with `spectrum()` and the device resolves it in `scene_device.textured_material`.
-TEXTURED_PARAMETERS = ("reflectance", "specular_reflectance", "specular_transmittance")
+# The parameters a texture may drive, in the order of SceneDevice.material_textures' components;
+# the loader reads the spectra with `spectrum()`, a mask's opacity (a scalar: the texture's
+# luminance) in `mask()`, and the device resolves each in `scene_device.textured_material`.
+TEXTURED_PARAMETERS = ("reflectance", "specular_reflectance", "specular_transmittance", "opacity")
 
 
 @dataclass
@@ -68,6 +69,8 @@ class MaterialDesc:
     nonlinear: bool = False
     coat_transmittance: np.ndarray | None = None
     bump: BumpDesc | None = None
+    masked: bool = False       # Mitsuba 3's `mask` around the material (bsdf.py: the null lobe)
+    opacity: float = 1.0       # its constant opacity (textured: textures["opacity"])
 
 
 def fresnel_diffuse_reflectance(eta: float) -> float:
@@ -313,6 +316,10 @@ class _Builder:
         if key in self.material_index:
             return self.material_index[key]
         p = self.props(obj, "bsdf")
+        mask = None
+        if p.type == "mask":
+            mask, obj = self.mask(p)
+            p = self.props(obj, "bsdf")
         bump = None
         if p.type == "bumpmap":
             bump, obj = self.bumpmap(p)
@@ -327,6 +334,11 @@ class _Builder:
         else:
             m = self.material_desc(obj)
         m.bump = bump
+        if mask is not None:
+            m.masked = True
+            m.opacity, tex = mask
+            if tex is not None:
+                m.textures["opacity"] = tex
         self.materials.append(m)
         self.material_index[key] = len(self.materials) - 1
         return self.material_index[key]
@@ -353,6 +365,30 @@ class _Builder:
                  "surface renders flat (as in Mitsuba 3)", tex.get("_loc", p.loc))
         p.warn_unqueried()
         return b, inner
+
+    def mask(self, p: Props) -> tuple[tuple[float, int | None], dict]:
+        """Mitsuba 3's `mask`: an opacity (a number, a grey spectrum, or a texture read as its
+        luminance, Mitsuba's eval_1; default 0.5) and exactly one BSDF, which may be a bumpmap or
+        a twosided. Returns ((constant opacity, texture index or None), the BSDF's object)."""
+        kids = p.children()
+        bsdfs = [c for c in kids if self.kind_of(c) == "bsdf"]
+        if len(bsdfs) != 1 or len(kids) > 2:
+            raise SceneError("mask needs exactly one nested BSDF (and an opacity)", p.loc)
+        inner = bsdfs[0]
+        if inner.get("type") == "mask":
+            raise SceneError("nested mask BSDFs are not supported", inner.get("_loc", p.loc))
+        v = p.color_or_texture("opacity", np.full(3, 0.5))
+        if isinstance(v, dict):
+            if self.kind_of(v) != "texture":
+                raise SceneError("a mask's opacity must be a number or a texture", p._loc_of("opacity"))
+            mask = (1.0, self.texture(v))
+        else:
+            if not np.all(v == v[0]):
+                raise SceneError("a mask's opacity is one number (Mitsuba 3 reads a scalar), not a colour",
+                                 p._loc_of("opacity"))
+            mask = (float(np.clip(v[0], 0.0, 1.0)), None)
+        p.warn_unqueried()
+        return mask, inner
 
     def warn_unapplied_bumps(self) -> None:
         """Bitterli's scenes declare `<bsdf type="bumpmap"> ... <bsdf type="twosided" id="X">` and
@@ -387,6 +423,9 @@ class _Builder:
             raise SceneError("nested twosided BSDFs are not supported", p.loc)
         if t == "bumpmap":
             raise SceneError("a bumpmap inside a twosided is not supported: put the twosided inside the bumpmap "
+                             "(as Bitterli's scenes do)", p.loc)
+        if t == "mask":
+            raise SceneError("a mask must be the outermost BSDF: put the twosided or bumpmap inside the mask "
                              "(as Bitterli's scenes do)", p.loc)
         if t == "diffuse":
             self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))

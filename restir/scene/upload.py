@@ -41,6 +41,8 @@ def material_struct(m, device="cpu") -> Material:
     s.fdr_int = float(m.fdr_int)
     s.nonlinear = int(m.nonlinear)
     s.bumped = int(m.bump is not None)
+    s.masked = int(m.masked)
+    s.opacity = float(m.opacity)
     table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
     s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
     return s
@@ -106,7 +108,8 @@ class DeviceScene:
         s.materials = wp.array(structs, dtype=Material, device=self.device)
         self._arrays.append(s.materials)
         s.material_textures = self._arr(np.array([[m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
-                                                  for m in sc.materials], np.int32).reshape(-1, 3), wp.vec3i)
+                                                  for m in sc.materials], np.int32).reshape(-1, len(TEXTURED_PARAMETERS)),
+                                        wp.vec4i)
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
 
         power = sc.light_power()

@@ -12,7 +12,13 @@
   diffuse seen from its back with flip_invalid_normals and the shadowing term off, and a mesh
   without texture coordinates (barycentric uvs); grey (8-bit, sRGB) and coloured (luminance)
   height maps with `scale` and `to_uv`; and Bitterli's unreferenced wrapper, whose bump neither
-  renderer applies.
+  renderer applies;
+- `write_mask_scene`: opacity masks (`mask`) as Bitterli's scenes use them and beyond: a leaf
+  whose one coloured bitmap is both its reflectance and (by luminance) its opacity (the living
+  room's plant), a constant opacity under the light (the kitchen's blinds: light reaches the floor
+  below through it only by BSDF sampling, since a shadow ray stops at a mask in both renderers),
+  a masked rug with a bump map over a floor of another colour, and masks around a rough and a
+  smooth conductor (a delta lobe); the camera sees through the leaf (stochastic primary hits).
 
 Both the Mitsuba reference generator and the test call them, so they render identical inputs.
 `SCENES` names them.
@@ -253,4 +259,81 @@ def write_bump_scene(directory: str) -> str:
     return path
 
 
-SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bumps": write_bump_scene}
+MASK_SCENE = _header("55", "0.2, 1.4, -4", "0, 0.7, 0") + f"""    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.25, 0.4, 0.6"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="3" y="1.5"/><rotate y="1" angle="180"/><translate y="1.5" z="2"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.55"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.9" y="0.7"/><rotate y="1" angle="160"/><translate x="-0.6" y="0.9" z="-1.6"/></transform>
+        <bsdf type="mask">
+            <texture name="opacity" type="bitmap"><string name="filename" value="leaf.png"/></texture>
+            <bsdf type="twosided"><bsdf type="diffuse">
+                <texture name="reflectance" type="bitmap"><string name="filename" value="leaf.png"/></texture>
+            </bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.8" y="0.8"/><rotate x="1" angle="90"/><translate x="0.9" y="1.8" z="0.6"/></transform>
+        <bsdf type="mask"><float name="opacity" value="0.6"/>
+            <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.61, 0.5, 0.38"/></bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="1.2" y="0.8"/><rotate x="1" angle="-90"/><translate x="-0.5" y="0.01" z="0.6"/></transform>
+        <bsdf type="mask">
+            <texture name="opacity" type="bitmap"><string name="filename" value="stripes.png"/></texture>
+            <bsdf type="bumpmap">{_bump_map("stripes.png", 0.1)}
+                <bsdf type="twosided"><bsdf type="roughplastic"><float name="alpha" value="0.25"/>
+                    <rgb name="diffuse_reflectance" value="0.7, 0.3, 0.2"/></bsdf></bsdf>
+            </bsdf>
+        </bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="1.3" y="0.45" z="-0.2"/><float name="radius" value="0.45"/>
+        <bsdf type="mask"><float name="opacity" value="0.5"/>
+            <bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/>
+                <rgb name="eta" value="0.2, 0.92, 1.1"/><rgb name="k" value="3.9, 2.45, 2.14"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.5" y="0.4"/><rotate y="1" angle="200"/><translate x="-1.5" y="1.1" z="1.3"/></transform>
+        <bsdf type="mask"><float name="opacity" value="0.7"/>
+            <bsdf type="conductor"><rgb name="eta" value="0.2, 0.92, 1.1"/><rgb name="k" value="3.9, 2.45, 2.14"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="90"/><translate x="0.5" y="3" z="-0.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="24, 21, 18"/></emitter>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="0.1, 0.12, 0.15"/></emitter>
+</scene>
+"""
+
+
+def write_mask_scene(directory: str) -> str:
+    from PIL import Image
+
+    os.makedirs(directory, exist_ok=True)
+    # a leaf: opaque green inside an ellipse with a soft edge, a darker vein, transparent outside
+    v, u = (np.mgrid[0:32, 0:48] + 0.5) / np.array([32.0, 48.0])[:, None, None]
+    r = np.sqrt(((u - 0.5) / 0.45) ** 2 + ((v - 0.5) / 0.3) ** 2)
+    inside = np.clip((1.0 - r) * 6.0, 0.0, 1.0)
+    vein = 1.0 - 0.5 * np.exp(-((v - 0.5) / 0.04) ** 2)
+    leaf = np.stack([0.35 * inside * vein, 0.95 * inside * vein, 0.3 * inside], -1)
+    Image.fromarray((255 * leaf).astype(np.uint8)).save(os.path.join(directory, "leaf.png"))
+    # soft stripes (grey, 8-bit sRGB): the rug's opacity and its height
+    x = (np.mgrid[0:16, 0:40][1] + 0.5) / 40.0
+    stripes = np.clip(0.5 + 0.7 * np.sin(2 * np.pi * 5 * x), 0.0, 1.0) * np.ones((16, 1))
+    Image.fromarray((255 * stripes).astype(np.uint8), mode="L").save(os.path.join(directory, "stripes.png"))
+    path = os.path.join(directory, "scene.xml")
+    with open(path, "w") as f:
+        f.write(MASK_SCENE)
+    return path
+
+
+SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bumps": write_bump_scene,
+          "masks": write_mask_scene}

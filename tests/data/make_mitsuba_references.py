@@ -30,6 +30,7 @@ REFERENCES = {
     "features": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: envmap, texture, plastic, ...
     "textures": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: checkerboard, filter / wrap modes, to_uv
     "bumps": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: bumpmap around six BSDFs, scale, to_uv, switches
+    "masks": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: mask by texture (luminance) and constant, around bumpmap, conductors
     "veach-ajar": (64, 36, 13, 4096, 16),
     "staircase2": (64, 36, 65, 4096, 16),  # Mitsuba 0.5 as distributed; its own max_depth
 }

@@ -22,7 +22,7 @@ import pytest
 import restir
 from restir.validation import IndependentRuns
 from tests.helpers import check
-from tests.scenes import bump_scene, half_dark_scene, shadow_scene
+from tests.scenes import bump_scene, half_dark_scene, mask_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
 
@@ -71,6 +71,8 @@ def scene(name):
         return shadow_scene()
     if name == "bumps":
         return bump_scene()
+    if name == "masks":
+        return mask_scene()
     if name == "features":
         from tests.data.feature_scene import write_feature_scene
 
@@ -102,12 +104,13 @@ def test_restir_di_matrix(name, config):
     assert rep.mdb < 0.08
 
 
-# on the bump-map scene (tests/data/feature_scene.py): candidates alone, each reuse, unshadowed
+# on the bump-map and the mask scenes (tests/data/feature_scene.py): candidates alone, each reuse, unshadowed
 # targets, the defaults and a moving camera
 BUMP_CELLS = ["C1-light-32-bsdf-1", "C2-cap-20", "C3-k4-rounds-3", "C4-defaults", "C4-unshadowed", "C4-orbit"]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", BUMP_CELLS)
-def test_restir_di_matrix_on_bump_maps(config):
-    test_restir_di_matrix("bumps", config)
+@pytest.mark.parametrize("name", ["bumps", "masks"])
+def test_restir_di_matrix_on_bump_maps_and_masks(name, config):
+    test_restir_di_matrix(name, config)

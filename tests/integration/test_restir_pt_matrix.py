@@ -18,7 +18,7 @@ scene (tests/data/feature_scene.py) with the cells of BUMP_CELLS.
 
 import pytest
 
-from tests.helpers import FULL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
@@ -42,7 +42,7 @@ MATRIX = {
 }
 
 
-# on the bump-map scene: every shift, spatial rounds, temporal reuse, the defaults and a moving camera
+# on the bump-map and the mask scenes (shifts across tilted frames and null lobes): every shift, spatial rounds, temporal reuse, the defaults and a moving camera
 BUMP_CELLS = ["C1-candidates-1", "C3-hybrid-k3", "C3-reconnection-k3", "C3-replay-k3", "C3-hybrid-k3-rounds-2",
               "C2-cap-20", "C4-defaults", "C4-orbit"]
 
@@ -58,7 +58,8 @@ def test_restir_pt_matrix(name, config):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", BUMP_CELLS)
-def test_restir_pt_matrix_on_bump_maps(config):
+@pytest.mark.parametrize("name", PARTIAL_MATRIX_SCENES)
+def test_restir_pt_matrix_on_bump_maps_and_masks(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
-    run_cell("bumps", "restir-pt", settings, motion, config)
+    run_cell(name, "restir-pt", settings, motion, config)

@@ -13,7 +13,7 @@ tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 
-from tests.helpers import FULL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 MATRIX = {
@@ -35,7 +35,7 @@ MATRIX = {
 }
 
 
-# on the bump-map scene: the gather alone, each reuse, the shifts and a moving camera
+# on the bump-map and the mask scenes (shifts across tilted frames and null lobes): the gather alone, each reuse, the shifts and a moving camera
 BUMP_CELLS = ["C5-gather-N2-M4", "C5-prefix-temporal", "C5-suffix-spatial", "C5-all", "C5-reconnection", "C5-replay",
               "C5-orbit"]
 
@@ -51,7 +51,8 @@ def test_suffix_restir_matrix(name, config):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", BUMP_CELLS)
-def test_suffix_restir_matrix_on_bump_maps(config):
+@pytest.mark.parametrize("name", PARTIAL_MATRIX_SCENES)
+def test_suffix_restir_matrix_on_bump_maps_and_masks(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
-    run_cell("bumps", "suffix-restir", settings, motion, config)
+    run_cell(name, "suffix-restir", settings, motion, config)

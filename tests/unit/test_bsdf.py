@@ -39,6 +39,7 @@ def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
     m.specular_sampling_weight = 1.0 / (1.0 + 0.5)
     m.fdr_int = 0.6
     m.nonlinear = 0
+    m.opacity = 1.0  # unmasked (upload.material_struct's default)
     if kind == MAT_ROUGHPLASTIC:
         from restir.scene.coat_tables import roughplastic_tables
 
@@ -97,6 +98,13 @@ def bumped(m, tilt_deg, shadowing=True):
     return m
 
 
+def masked(m, opacity):
+    """m inside a mask of the given opacity (the null lobe with probability 1 - opacity)."""
+    m.masked = 1
+    m.opacity = float(opacity)
+    return m
+
+
 SMOOTH_CASES = [
     ("diffuse", material(MAT_DIFFUSE), direction(40)),
     ("diffuse-twosided-back", material(MAT_DIFFUSE, twosided=1), direction(40, below=True)),
@@ -121,6 +129,11 @@ SMOOTH_CASES = [
     ("bumped-roughplastic", bumped(material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), 25), direction(60, 200)),
     ("bumped-roughdielectric-inside", bumped(material(MAT_ROUGHDIELECTRIC, (0.3, 0.3)), 20, False),
      direction(25, below=True)),
+    # masked: non-delta samples carry pdf * opacity, the rest pass through (test_mask_null_lobe)
+    ("masked-diffuse", masked(material(MAT_DIFFUSE), 0.6), direction(40)),
+    ("masked-roughplastic-twosided-back", masked(material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49, twosided=1), 0.35),
+     direction(50, below=True)),
+    ("masked-bumped-diffuse", masked(bumped(material(MAT_DIFFUSE), 30), 0.8), direction(40)),
 ]
 
 
@@ -225,3 +238,60 @@ def test_plastic_specular_lobe():
     assert abs(d.mean() - p_spec) < 4.5 * np.sqrt(p_spec * (1 - p_spec) / len(d))
     np.testing.assert_allclose(wo[d], np.tile([-wi[0], -wi[1], wi[2]], (d.sum(), 1)), atol=1e-6)
     np.testing.assert_allclose(weight[d], np.tile(np.array([1.0, 0.9, 0.8]) * F / p_spec, (d.sum(), 1)), rtol=1e-4)
+
+
+@pytest.mark.parametrize("kind,opacity", [(MAT_DIFFUSE, 0.6), (MAT_CONDUCTOR, 0.7), (MAT_ROUGHCONDUCTOR, 0.0),
+                                          (MAT_DIELECTRIC, 1.0)])
+def test_mask_null_lobe(kind, opacity):
+    """A mask passes straight through (wo = -wi, weight 1, pdf 1 - opacity, delta, eta 1) with
+    probability 1 - opacity; otherwise the nested sample, its weight unchanged and a delta lobe's
+    pdf scaled by the opacity (Mitsuba 3's mask.cpp); eval and pdf are the kind's times opacity."""
+    wi = direction(50)
+    n = 200_000
+    base = material(kind)
+    m = masked(material(kind), opacity)
+    wo, weight, pdf, valid, pdf_check, eval_check, delta = run_sampler(m, wi, n=n, with_delta=True)
+    wo0, weight0, pdf0, valid0, pdf_check0, eval_check0, delta0 = run_sampler(base, wi, n=n, with_delta=True)
+    null = (delta == 1) & np.all(np.abs(wo + wi) < 1e-6, axis=1)
+    if kind == MAT_DIELECTRIC:  # a smooth dielectric's own refraction at 50 deg is not straight through
+        assert not null.any()
+    se = np.sqrt(opacity * (1 - opacity) / n) + 1e-9
+    assert abs(null.mean() - (1 - opacity)) < 4.5 * se
+    if null.any():
+        np.testing.assert_allclose(weight[null], 1.0)
+        np.testing.assert_allclose(pdf[null], 1 - opacity, rtol=1e-6)
+    # same numbers: the nested part sees u_lobe / opacity, so its samples are the unmasked ones of
+    # those numbers; checked through the statistics of the scattering samples
+    sc = valid.astype(bool) & ~null
+    if opacity > 0:
+        ok0 = valid0.astype(bool)
+        for a, b in ((weight[sc], weight0[ok0]), (wo[sc, 2:], wo0[ok0, 2:])):
+            np.testing.assert_allclose(a.mean(0), b.mean(0), rtol=2e-3, atol=6 * (a.std(0).max() + 1e-6) / np.sqrt(sc.sum()))
+        d = delta[sc] == 1
+        if d.any():
+            # each delta sample's pdf is opacity times one of the unmasked delta lobes' pdfs
+            lobes = np.unique(np.round(pdf0[ok0][delta0[ok0] == 1], 5))
+            ratio = pdf[sc][d][:, None] / opacity
+            assert np.all(np.min(np.abs(ratio - lobes[None, :]), axis=1) < 1e-4), lobes
+    # eval and pdf at the unmasked material's sampled directions: the factor opacity exactly
+    ok0 = (valid0 == 1) & (delta0 == 0)
+    if ok0.any():
+        m_eval = run_eval(m, wi, wo0[ok0])
+        np.testing.assert_allclose(m_eval[0], opacity * eval_check0[ok0], rtol=1e-6, atol=1e-12)
+        np.testing.assert_allclose(m_eval[1], opacity * pdf_check0[ok0], rtol=1e-6, atol=1e-12)
+
+
+@wp.kernel
+def eval_pdf_kernel(mat: Material, wi: wp.vec3, dirs: wp.array(dtype=wp.vec3), f: wp.array(dtype=wp.vec3),
+                    pdf: wp.array(dtype=float)):
+    i = wp.tid()
+    f[i] = bsdf_eval(mat, wi, dirs[i])
+    pdf[i] = bsdf_pdf(mat, wi, dirs[i])
+
+
+def run_eval(mat, wi, dirs):
+    f = wp.zeros(len(dirs), dtype=wp.vec3, device="cpu")
+    p = wp.zeros(len(dirs), dtype=float, device="cpu")
+    wp.launch(eval_pdf_kernel, dim=len(dirs), inputs=[mat, wp.vec3(*wi), wp.array(dirs.astype(np.float32), dtype=wp.vec3,
+                                                                                  device="cpu"), f, p], device="cpu")
+    return f.numpy(), p.numpy()

@@ -19,7 +19,7 @@ from restir.device.bsdf import bsdf_eval, bsdf_pdf, bsdf_sample
 from restir.device.intersect import surface_at
 from restir.device.sampling import to_local
 from restir.device.scene_device import SceneDevice
-from restir.device.textures import Texture, height_of, texture_eval, texture_grad1
+from restir.device.textures import Texture, scalar_of, texture_eval, texture_grad1
 from restir.scene.errors import SceneError, SceneWarning
 from restir.scene.upload import DeviceScene
 
@@ -57,10 +57,10 @@ def grad_kernel(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec
     grad[i] = texture_grad1(textures, texels, 0, uv)
     du = wp.vec2(h, 0.0)
     dv = wp.vec2(0.0, h)
-    fd[i] = wp.vec2((height_of(texture_eval(textures, texels, 0, uv + du)) -
-                     height_of(texture_eval(textures, texels, 0, uv - du))) / (2.0 * h),
-                    (height_of(texture_eval(textures, texels, 0, uv + dv)) -
-                     height_of(texture_eval(textures, texels, 0, uv - dv))) / (2.0 * h))
+    fd[i] = wp.vec2((scalar_of(texture_eval(textures, texels, 0, uv + du)) -
+                     scalar_of(texture_eval(textures, texels, 0, uv - du))) / (2.0 * h),
+                    (scalar_of(texture_eval(textures, texels, 0, uv + dv)) -
+                     scalar_of(texture_eval(textures, texels, 0, uv - dv))) / (2.0 * h))
 
 
 def test_gradient_is_the_derivative_of_the_lookup(tmp_path):

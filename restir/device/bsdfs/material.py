@@ -7,6 +7,7 @@ scattered direction, both away from the surface; eval returns f(wi, wo) * |cos t
 import warp as wp
 
 from ..microfacet import Microfacet
+from ..types import LOBE_NULL
 
 
 @wp.struct
@@ -36,6 +37,13 @@ class Material:
     bumped: int
     bump_n0: wp.vec3           # the unperturbed shading normal ns in the tilted frame
     bump_alpha2: float         # the terminator-shadowing alpha^2 (0: no shadowing)
+    # A mask (Mitsuba 3's `mask`): with probability 1 - opacity the path passes straight through
+    # (the null lobe), else the material scatters, so eval and pdf carry the factor opacity.
+    # `masked` is set in the scene's record and decides the lobe set (never a hit's value);
+    # `opacity` is 1 on unmasked materials (every product with it is then exact) and, where a
+    # texture drives it, resolved per hit by scene_device.textured_material.
+    masked: int
+    opacity: float
 
 
 @wp.struct
@@ -72,6 +80,20 @@ def delta_sample(s_in: BSDFSample, wo: wp.vec3, pdf: float, weight: wp.vec3, lob
     s.is_delta = 1
     s.valid = 1
     s.lobe = lobe
+    return s
+
+
+@wp.func
+def null_sample(wi: wp.vec3, pdf: float) -> BSDFSample:
+    """A mask's pass-through: wo = -wi (no change of direction or medium), chosen with
+    probability pdf = 1 - opacity, weight 1 (Mitsuba's mask sample)."""
+    s = invalid_sample()
+    s.wo = -wi
+    s.pdf = pdf
+    s.weight = wp.vec3(1.0)
+    s.is_delta = 1
+    s.valid = 1
+    s.lobe = LOBE_NULL
     return s
 
 

@@ -67,9 +67,9 @@ class PathReservoir:
 
 @wp.func
 def lobe_code(lobe: int) -> int:
-    """A LOBE_* flag (one bit of six) as a 3-bit code: 0 for none, else 1 + the bit's index."""
+    """A LOBE_* flag (one bit of seven) as a 3-bit code: 0 for none, else 1 + the bit's index."""
     code = int(0)
-    for b in range(6):
+    for b in range(7):
         if lobe == (1 << b):
             code = b + 1
     return code
