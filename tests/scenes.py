@@ -96,6 +96,21 @@ def bump_scene():
         return restir.load_scene(write_bump_scene(tempfile.mkdtemp()))
 
 
+def write_scene(tmp_path, bsdf_xml: str, image: np.ndarray | None = None, mode: str = "RGB", before: str = "") -> str:
+    """A scene with one rectangle (z = 0, facing +z, uv (0, 0) at (-1, -1)) carrying bsdf_xml,
+    after the top-level objects `before`."""
+    from PIL import Image
+
+    if image is not None:
+        Image.fromarray(image, mode=mode).save(tmp_path / "h.png")
+    (tmp_path / "s.xml").write_text(f"""<scene version="3.0.0">
+        <sensor type="perspective"><float name="fov" value="40"/><film type="hdrfilm"><integer name="width" value="4"/>
+            <integer name="height" value="4"/></film></sensor>{before}
+        <shape type="rectangle">{bsdf_xml}</shape>
+    </scene>""")
+    return str(tmp_path / "s.xml")
+
+
 def mask_scene():
     """The opacity-mask scene (tests/data/feature_scene.py: masks by texture and constant, around a
     bump map and two conductors), from a fresh temporary folder."""

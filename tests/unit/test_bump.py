@@ -22,21 +22,7 @@ from restir.device.scene_device import SceneDevice
 from restir.device.textures import Texture, scalar_of, texture_eval, texture_grad1
 from restir.scene.errors import SceneError, SceneWarning
 from restir.scene.upload import DeviceScene
-
-
-def write_scene(tmp_path, bsdf_xml: str, image: np.ndarray | None = None, mode: str = "RGB", before: str = "") -> str:
-    """A scene with one rectangle (z = 0, facing +z, uv (0, 0) at (-1, -1)) carrying bsdf_xml,
-    after the top-level objects `before`."""
-    from PIL import Image
-
-    if image is not None:
-        Image.fromarray(image, mode=mode).save(tmp_path / "h.png")
-    (tmp_path / "s.xml").write_text(f"""<scene version="3.0.0">
-        <sensor type="perspective"><float name="fov" value="40"/><film type="hdrfilm"><integer name="width" value="4"/>
-            <integer name="height" value="4"/></film></sensor>{before}
-        <shape type="rectangle">{bsdf_xml}</shape>
-    </scene>""")
-    return str(tmp_path / "s.xml")
+from tests.scenes import write_scene
 
 
 def device_scene(path) -> DeviceScene:

@@ -17,7 +17,7 @@ from restir.device.scene_device import SceneDevice
 from restir.device.types import LOBE_DIFFUSE_REFLECTION, LOBE_NULL
 from restir.scene.errors import SceneError
 from restir.scene.upload import DeviceScene
-from tests.unit.test_bump import write_scene
+from tests.scenes import write_scene
 
 DIFFUSE = '<bsdf type="twosided"><bsdf type="diffuse"/></bsdf>'
 ONE_SIDED = '<bsdf type="diffuse"/>'
