@@ -382,6 +382,7 @@ class _Builder:
             if self.kind_of(v) != "texture":
                 raise SceneError("a mask's opacity must be a number or a texture", p._loc_of("opacity"))
             mask = (1.0, self.texture(v))
+            self.warn_dropped_alpha(v)
         else:
             if not np.all(v == v[0]):
                 raise SceneError("a mask's opacity is one number (Mitsuba 3 reads a scalar), not a colour",
@@ -389,6 +390,26 @@ class _Builder:
             mask = (float(np.clip(v[0], 0.0, 1.0)), None)
         p.warn_unqueried()
         return mask, inner
+
+    def warn_dropped_alpha(self, tex: dict) -> None:
+        """A mask's opacity is the bitmap's RGB luminance: Mitsuba 3 drops an alpha channel (its
+        bitmap texture keeps Y or RGB), and so does restir. Bitterli's living room masks its
+        plant by such a file (leaf.png: RGB near white where alpha is 0), so the leaves come out
+        the other way round in both renderers; said, since the file's author meant the alpha."""
+        fname = tex.get("filename")
+        if tex.get("type") != "bitmap" or not isinstance(fname, str):
+            return
+        path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+        try:
+            from PIL import Image
+
+            with Image.open(path) as im:
+                alpha = im.mode in ("RGBA", "LA", "PA") or "transparency" in im.info
+        except Exception:  # not a PIL image (EXR, HDR, PFM), or missing: read as RGB anyway
+            return
+        if alpha:
+            warn(f"mask: '{fname}' has an alpha channel, which is dropped: the opacity is the luminance of "
+                 "its RGB, as in Mitsuba 3 (to mask by the alpha, save it as a greyscale image)", tex.get("_loc"))
 
     def warn_unapplied_bumps(self) -> None:
         """Bitterli's scenes declare `<bsdf type="bumpmap"> ... <bsdf type="twosided" id="X">` and

@@ -45,6 +45,23 @@ def test_bitterlis_masks_load(tmp_path):
     assert m.opacity == 1.0  # clipped, as Mitsuba's eval_opacity does
 
 
+def test_an_alpha_channel_is_dropped_and_said(tmp_path):
+    """Mitsuba 3 reads a mask's RGBA bitmap as RGB (bitmap.cpp drops alpha): so does restir,
+    with a warning, since Bitterli's living room means the alpha (its leaf.png is near white
+    where alpha is 0)."""
+    from restir.scene.errors import SceneWarning
+
+    rgba = np.zeros((2, 2, 4), np.uint8)
+    rgba[..., :3], rgba[..., 3] = 250, 0
+    from PIL import Image
+
+    path = write_scene(tmp_path, mask_xml())
+    Image.fromarray(rgba, mode="RGBA").save(tmp_path / "h.png")
+    with pytest.warns(SceneWarning, match="alpha channel, which is dropped"):
+        sc = restir.load_scene(path)
+    assert sc.textures[0].image.shape[-1] == 3 and sc.textures[0].image.min() > 0.9  # the RGB, not the alpha
+
+
 def test_a_v05_spectrum_opacity_loads(tmp_path):
     """The kitchen's `<spectrum name="opacity" value="0.612066"/>` in a Mitsuba 0.5 file."""
     (tmp_path / "s.xml").write_text("""<scene version="0.5.0">
