@@ -38,7 +38,8 @@ IOR_TABLE = {
 # The parameters a texture may drive, in the order of SceneDevice.material_textures' components;
 # the loader reads the spectra with `spectrum()`, a mask's opacity (a scalar: the texture's
 # luminance) in `mask()`, and the device resolves each in `scene_device.textured_material`.
-TEXTURED_PARAMETERS = ("reflectance", "specular_reflectance", "specular_transmittance", "opacity")
+TEXTURED_SPECTRA = ("reflectance", "specular_reflectance", "specular_transmittance")
+TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity",)
 
 
 @dataclass

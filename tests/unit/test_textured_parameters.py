@@ -13,12 +13,12 @@ import warp as wp
 
 import restir
 from restir.device.scene_device import SceneDevice, textured_material
-from restir.scene.scene import TEXTURED_PARAMETERS
+from restir.scene.scene import TEXTURED_SPECTRA
 from restir.scene.upload import DeviceScene
 
 TEXELS = np.array([[[10, 200, 30], [250, 5, 90]],
                    [[60, 70, 240], [128, 255, 0]]], np.uint8)  # rows top to bottom
-SPECTRA = TEXTURED_PARAMETERS
+SPECTRA = TEXTURED_SPECTRA
 
 SCENE = """<scene version="3.0.0">
     <sensor type="perspective"><float name="fov" value="40"/>
