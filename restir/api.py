@@ -41,7 +41,8 @@ def _define_value(v) -> str:
     raise SceneError(f"parameter value {v!r} is not a number or a string")
 
 
-def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "error", **params) -> Scene:
+def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "error", progress=None,
+               **params) -> Scene:
     """Load a scene, the way Mitsuba 3's loaders are called.
 
     - a Mitsuba 3 XML file: keyword parameters set its `<default name=...>` values, as
@@ -54,11 +55,14 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
 
     `missing_textures="grey"` renders a bitmap whose file is missing as constant grey (0.5), with
     a warning, instead of stopping (downloaded scenes often lack a texture).
+
+    `progress(done, total)`, when given, is called as the scene's top-level elements are built
+    (a large scene spends its load reading meshes there); `restir render` shows it as a bar.
     """
     if isinstance(spec, dict):
         if defines or params:
             raise SceneError("parameters apply to XML files and builtins; put the values in the dict")
-        return build_scene(copy.deepcopy(spec), str(spec.get("id", "dict-scene")), missing_textures)
+        return build_scene(copy.deepcopy(spec), str(spec.get("id", "dict-scene")), missing_textures, progress)
     if not isinstance(spec, (str, os.PathLike)):
         raise SceneError(f"a scene is an XML path, 'builtin:NAME' or a dict, not {type(spec).__name__}")
     spec = os.fspath(spec)
@@ -73,9 +77,9 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
                 if unknown:
                     raise SceneError(f"unknown parameter(s) {', '.join(unknown)} (builtin:{name} takes "
                                      f"{', '.join(accepted)})", spec)
-        return build_scene(builtin_scene(name, **params), name, missing_textures)
+        return build_scene(builtin_scene(name, **params), name, missing_textures, progress)
     merged = {k: _define_value(v) for k, v in {**(defines or {}), **params}.items()}
-    return build_scene(load_xml(spec, merged, required=set(params)), spec, missing_textures)
+    return build_scene(load_xml(spec, merged, required=set(params)), spec, missing_textures, progress)
 
 
 @dataclass

@@ -8,6 +8,7 @@ import os
 import sys
 import tempfile
 import textwrap
+import time
 import warnings
 
 from ..config import ConfigError
@@ -192,13 +193,49 @@ def progress_bar(con, *columns):
                     console=con, transient=True)
 
 
+class _LoadProgress:
+    """A bar for a scene load that is slow: shown only once the load has taken SHOW_AFTER seconds,
+    so a small scene prints nothing."""
+
+    SHOW_AFTER = 1.0
+
+    def __init__(self, con, spec: str):
+        self.con, self.spec = con, spec
+        self.start = time.perf_counter()
+        self.bar = self.task = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            if time.perf_counter() - self.start < self.SHOW_AFTER:
+                return
+            from rich.progress import MofNCompleteColumn
+
+            self.bar = progress_bar(self.con, MofNCompleteColumn())
+            self.bar.start()
+            self.task = self.bar.add_task(f"loading {os.path.basename(self.spec)} (scene elements)", total=total)
+        self.bar.update(self.task, completed=done, total=total)
+
+    def close(self) -> float:
+        """Stop the bar; the load's seconds."""
+        if self.bar is not None:
+            self.bar.stop()
+        return time.perf_counter() - self.start
+
+
 def load_scene(spec: str, defines, con, missing_textures: str = "error"):
-    """api.load_scene with each SceneWarning said on `con` (one line each)."""
+    """api.load_scene with each SceneWarning said on `con` (one line each), a progress bar when
+    the load takes over a second, and its time said then."""
     from .. import api
 
+    shown = _LoadProgress(con, spec)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
-        scene = api.load_scene(spec, dict(defines) or None, missing_textures=missing_textures)
+        try:
+            scene = api.load_scene(spec, dict(defines) or None, missing_textures=missing_textures, progress=shown)
+        finally:
+            seconds = shown.close()
+    if seconds > _LoadProgress.SHOW_AFTER:
+        say(con, f"loaded {spec} in {seconds:.1f} s ({scene.num_triangles:,} triangles)")
     for w in caught:
         if issubclass(w.category, SceneWarning):
             say(con, str(w.message), "[yellow]warning:[/] ")

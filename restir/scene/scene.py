@@ -156,10 +156,11 @@ MISSING_GREY = 0.5
 
 
 class _Builder:
-    def __init__(self, tree: dict, name: str, missing_textures: str = "error"):
+    def __init__(self, tree: dict, name: str, missing_textures: str = "error", progress=None):
         if missing_textures not in MISSING_TEXTURES:
             raise SceneError(f"missing_textures must be one of {', '.join(MISSING_TEXTURES)}, not '{missing_textures}'")
         self.missing_textures = missing_textures
+        self.progress = progress
         self.tree = tree
         self.name = name
         self.ids = tree.get("_ids", {})
@@ -196,7 +197,10 @@ class _Builder:
     # --------------------------------------------------------------- top level
     def build(self) -> Scene:
         root = Props(self.tree, self.ids)
-        for obj in root.children():
+        children = root.children()
+        for done, obj in enumerate(children):
+            if self.progress is not None:
+                self.progress(done, len(children))
             kind = self.kind_of(obj)
             if kind == "shape":
                 self.shape(obj)
@@ -212,6 +216,8 @@ class _Builder:
                     self.bump_wrappers.append(obj)
             else:
                 raise SceneError(f"a {kind} cannot appear at the top level", obj.get("_loc"))
+        if self.progress is not None:
+            self.progress(len(children), len(children))
         self.warn_unapplied_bumps()
         if self.camera is None:
             raise SceneError("the scene has no <sensor>", self.tree.get("_loc"))
@@ -670,7 +676,9 @@ def _read_image(path: str, fname: str, loc: str, linearize_srgb: bool) -> np.nda
     return img
 
 
-def build_scene(tree: dict, name: str = "scene", missing_textures: str = "error") -> Scene:
+def build_scene(tree: dict, name: str = "scene", missing_textures: str = "error", progress=None) -> Scene:
     """Build a host Scene from a Mitsuba-style scene dict; `missing_textures` (MISSING_TEXTURES)
-    says what a bitmap whose file is missing becomes: an error, or constant grey with a warning."""
-    return _Builder(tree, name, missing_textures).build()
+    says what a bitmap whose file is missing becomes: an error, or constant grey with a warning.
+    `progress(done, total)`, when given, is called before each top-level element (shapes, the
+    sensor, emitters) and once at the end: meshes are read there, most of a large scene's load."""
+    return _Builder(tree, name, missing_textures, progress).build()

@@ -162,3 +162,31 @@ def test_the_two_obj_readers_agree():
                  body + "vt 0 1 0\nf 1 2 3\n"]
     for text in irregular:
         assert _read_obj_regular(text) is None, text
+
+
+def test_ply_triangles_and_polygons(tmp_path):
+    """load_ply: a binary file of triangles (read as one array), one with a quad among them (the
+    face-by-face read, fanned) and the same in ASCII all give the same fan triangulation."""
+    from restir.scene.shapes import load_ply
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1]], np.float32)
+    header = ("ply\nformat {fmt} 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+              "element face {n}\nproperty list uint8 int vertex_indices\nend_header\n")
+
+    def write(name, faces, binary):
+        with open(tmp_path / name, "wb") as f:
+            f.write(header.format(fmt="binary_little_endian" if binary else "ascii", n=len(faces)).encode())
+            if binary:
+                f.write(v.tobytes())
+                for face in faces:
+                    f.write(bytes([len(face)]) + np.asarray(face, "<i4").tobytes())
+            else:
+                f.write("".join(" ".join(map(str, p)) + "\n" for p in v.tolist()).encode())
+                f.write("".join(f"{len(face)} " + " ".join(map(str, face)) + "\n" for face in faces).encode())
+        return load_ply(str(tmp_path / name), name).positions
+
+    tris = [[0, 1, 2], [0, 2, 3], [1, 2, 4]]
+    mixed = [[0, 1, 2, 3], [1, 2, 4]]  # the quad fans into the first two triangles
+    expected = v[np.array(tris)]
+    for got in (write("t.ply", tris, True), write("m.ply", mixed, True), write("a.ply", mixed, False)):
+        np.testing.assert_array_equal(got, expected)
