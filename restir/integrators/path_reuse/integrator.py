@@ -14,7 +14,8 @@ from ..common.gbuffer import PingPong, allocate_gbuffer
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
 
-PT_MAX_DEPTH = 64  # max_depth -1 renders at this depth (path lengths are 8-bit fields)
+PT_MAX_DEPTH = 255  # path lengths are 8-bit fields (Bitterli's scenes ask for max_depth 65)
+PT_UNBOUNDED_DEPTH = 64  # max_depth -1 renders at this depth, with a note
 
 
 def summarize_shifts(shift_counts: dict) -> tuple[dict, list]:
@@ -72,7 +73,7 @@ class PathReuseIntegrator(Integrator):
         if s.debug_mutation not in cls.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(cls.MUTATIONS)}")
         if s.max_depth > PT_MAX_DEPTH:
-            raise ConfigError(f"{cls.name} renders max_depth up to {PT_MAX_DEPTH} (or -1)")
+            raise ConfigError(f"{cls.name} renders max_depth up to {PT_MAX_DEPTH} (or -1, as {PT_UNBOUNDED_DEPTH})")
         check_di_settings(s)
 
     def allocate_path_reuse(self) -> None:
@@ -83,8 +84,8 @@ class PathReuseIntegrator(Integrator):
 
         s = self.settings
         if s.max_depth < 0:
-            s.max_depth = PT_MAX_DEPTH
-            self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_MAX_DEPTH}")
+            s.max_depth = PT_UNBOUNDED_DEPTH
+            self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_UNBOUNDED_DEPTH}")
         self.spatial_radius = getattr(s, self.SPATIAL).resolve_radius(self.height)
         self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
         self.primary_weight = self.buffer("primary_weight", float)
