@@ -252,7 +252,7 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
                                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     cls.check_settings(settings)
     try:
-        dscene = DeviceScene(scene, config.device, config.tracer)
+        dscene = DeviceScene(scene, config.device, config.tracer, config.jitter)
     except RuntimeError as e:
         raise ConfigError(str(e)) from None
     integ = cls(dscene, settings, config.device, config.slices, on_compile=on_compile)

@@ -46,6 +46,7 @@ class RenderConfig:
     camera_motion: str = "none"     # "none", "orbit" (speed: degrees/frame), "dolly" (speed: scene sizes/frame)
     camera_speed: float = 1.0
     aovs: tuple = ()                # extra outputs: "albedo", "normal" (RenderResult.aovs; restir/aov.py)
+    jitter: bool = True             # False: every primary ray through its pixel centre (device/camera.py)
 
     def validate(self) -> None:
         if self.spp is not None and self.spp < 1:

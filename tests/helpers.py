@@ -127,7 +127,10 @@ def check_no_trend(means, peaks):
 
 # ------------------------------------------------------------------ the path-reuse stage-isolation matrix
 MATRIX_SIZE = 32
-MATRIX_CAMERA_SPEED = {"none": 1.0, "orbit": 3.0, "dolly": 0.02}
+# A cell's camera: (RenderConfig.camera_motion, camera_speed, jitter); "centre" is the static
+# camera with every primary ray through its pixel centre (RenderConfig.jitter False), reference too
+MATRIX_CAMERAS = {"none": ("none", 1.0, True), "orbit": ("orbit", 3.0, True), "dolly": ("dolly", 0.02, True),
+                  "centre": ("none", 1.0, False)}
 # scene: (loader, max_depth, MDB bound, runs K, frames T)
 MATRIX_SCENES = {
     "cornell-box-glossy": (lambda: restir.load_scene("builtin:cornell-box-glossy"), 5, 0.05, 64, 8),
@@ -157,8 +160,9 @@ MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):
     load, depth, _, scene_runs, frames = MATRIX_SCENES[name]
+    motion, speed, jitter = MATRIX_CAMERAS[motion]
     cfg = restir.RenderConfig(method=method, spp=spp, frames=frames, width=MATRIX_SIZE, height=MATRIX_SIZE, max_depth=depth,
-                              settings=settings, camera_motion=motion, camera_speed=MATRIX_CAMERA_SPEED[motion])
+                              settings=settings, camera_motion=motion, camera_speed=speed, jitter=jitter)
     # RESTIR_TEST_WORKERS=n: the runs on n local processes, bitwise the same images (measured on
     # veach-mis, 48 runs: 0.38 s a run with 2 workers of one thread each, 0.47 s in one process
     # with 2 threads: at 32x32 a process is held back by its Python launch overhead)

@@ -87,6 +87,13 @@ def defines_option(p) -> None:
                         "grey 0.5 with a warning (grey)")
 
 
+def jitter_option(p) -> None:
+    p.add_argument("--no-jitter", dest="jitter", action="store_false",
+                   help="every primary ray through its pixel centre, for every method and the reference: a fixed "
+                        "primary hit per pixel, the image the radiance at the centres (edges alias), as the Suffix "
+                        "ReSTIR paper evaluates (default: samples spread by the film's filter, as in Mitsuba)")
+
+
 def device_option(p) -> None:
     p.add_argument("--device", default="cpu", help="cpu or cuda (or cuda:N)")
 

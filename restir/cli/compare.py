@@ -2,8 +2,8 @@
 structure (what a denoiser sees), a headline, JSON and the HTML report."""
 from ..config import ConfigError
 from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option,
-                     device_option, fanout_options, load_scene, open_tev, progress_bar, results_console, say,
-                     scene_argument, tev_option, write, write_json)
+                     device_option, fanout_options, jitter_option, load_scene, open_tev, progress_bar, results_console,
+                     say, scene_argument, tev_option, write, write_json)
 
 
 def add_parser(sub) -> None:
@@ -30,6 +30,7 @@ def add_parser(sub) -> None:
                    "scene's; 2 when restir-di is compared)")
     defines_option(c)
     device_option(c)
+    jitter_option(c)
     c.add_argument("--report", metavar="DIR", help="write the HTML report (opens offline) into this folder")
     c.add_argument("--json", metavar="FILE", help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
@@ -99,7 +100,7 @@ def run(args) -> int:
                            width=args.width, height=args.height, max_depth=args.max_depth, device=args.device,
                            denoise=args.denoise, correlation_runs=args.correlation_runs,
                            match_frame_time=args.match_frame_time, workers=args.workers, ray=args.ray,
-                           scene_file=args.scene, defines=dict(args.defines))
+                           scene_file=args.scene, defines=dict(args.defines), jitter=args.jitter)
     with progress_bar(con, "{task.percentage:>3.0f}%") as bar:
         tasks = {}
 

@@ -6,8 +6,8 @@ import sys
 from ..config import ConfigError, RenderConfig, parse_aovs
 from ..image_io import IMAGE_FORMATS, LDR_FORMATS
 from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option,
-                     device_option, key_value, load_scene, open_tev, progress_bar, say, scene_argument, tev_option,
-                     write, write_json)
+                     device_option, jitter_option, key_value, load_scene, open_tev, progress_bar, say, scene_argument,
+                     tev_option, write, write_json)
 
 
 def add_parser(sub) -> None:
@@ -25,6 +25,7 @@ def add_parser(sub) -> None:
                    "restir-di computes 2 only; restir-pt and suffix-restir up to 64)")
     r.add_argument("--seed", type=int, default=0, help="random seed")
     device_option(r)
+    jitter_option(r)
     r.add_argument("--tracer", default="auto", choices=["auto", "embree", "warp"],
                    help="CPU ray tracer (auto: Embree if available; CUDA always uses Warp's BVH)")
     r.add_argument("--camera-motion", default="none", choices=["none", "orbit", "dolly"],
@@ -70,7 +71,8 @@ def run(args) -> int:
     config = RenderConfig(method=args.method, spp=args.spp, frames=args.frames, width=args.width,
                           height=args.height, max_depth=args.max_depth, seed=args.seed, device=args.device,
                           tracer=args.tracer, camera_motion=args.camera_motion, camera_speed=args.camera_speed,
-                          settings=dict(args.settings), keep_frames=bool(args.write_frames), aovs=aovs)
+                          settings=dict(args.settings), keep_frames=bool(args.write_frames), aovs=aovs,
+                          jitter=args.jitter)
     config.validate()
     output = args.output or default_output(args.scene)
     check_output(output, "-o" if args.output else "output", tuple(IMAGE_FORMATS))

@@ -3,7 +3,7 @@ with a table, JSON, CSV and a report."""
 import os
 
 from .common import (add_command, check_output_folder, console, defines_option, device_option, fanout_options,
-                     load_scene, progress_bar, results_console, say, scene_argument)
+                     jitter_option, load_scene, progress_bar, results_console, say, scene_argument)
 
 
 def add_parser(sub) -> None:
@@ -25,6 +25,7 @@ def add_parser(sub) -> None:
     s.add_argument("--max-depth", type=int, help="max_depth (default: the scene's)")
     defines_option(s)
     device_option(s)
+    jitter_option(s)
     s.add_argument("--out", default="out/sweep", metavar="DIR", help="writes DIR/sweep.json, DIR/sweep.csv and "
                    "the report DIR/report/index.html")
     s.add_argument("--quiet", action="store_true", help="no progress display")
@@ -47,7 +48,7 @@ def run(args) -> int:
         result = sweep(scene, args.method, points, seeds=args.seeds, frames=args.frames, spp=args.spp,
                        warmup=args.warmup, reference=args.reference, reference_spp=args.reference_spp,
                        width=args.width, height=args.height, max_depth=args.max_depth, device=args.device,
-                       workers=args.workers, ray=args.ray,
+                       workers=args.workers, ray=args.ray, jitter=args.jitter,
                        progress=lambda done, total: bar.update(task, completed=done))
     table = Table(title=f"{args.method} on {result.comparison.scene}: {result.comparison.budget}")
     for col in ("grid point", "relMSE per frame", "relMSE accumulated", "MAPE", "ms/frame"):

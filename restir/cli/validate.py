@@ -7,7 +7,7 @@ from ..config import ConfigError, RenderConfig
 from ..fanout import default_workers
 from ..image_io import IMAGE_FORMATS
 from .common import (DEFAULT_MAX_MDB, add_command, check_output, console, defines_option, device_option,
-                     fanout_options, fraction, key_value, load_scene, scene_argument, write)
+                     fanout_options, fraction, jitter_option, key_value, load_scene, scene_argument, write)
 
 VERDICT_STATUS = {"pass": 0, "fail": 1, "inconclusive": 3}
 
@@ -44,6 +44,7 @@ def add_parser(sub) -> None:
     v.add_argument("--camera-speed", type=float, default=1.0, help="orbit: degrees per frame; dolly: scene "
                    "diagonals per frame")
     device_option(v)
+    jitter_option(v)
     v.add_argument("--zmap", metavar="FILE", help="write the per-pixel z map here (.png, .exr, .npy)")
     fanout_options(v, "the independent runs")
 
@@ -114,7 +115,7 @@ def _validate_images(args) -> int:
         h, w = images[0].shape[:2]
         scene = load_scene(args.scene, args.defines, console(), args.missing_textures)
         ref_cfg = RenderConfig(method="pt", spp=args.ref_spp, frames=args.frames, width=w, height=h,
-                               max_depth=args.max_depth, device=args.device)
+                               max_depth=args.max_depth, device=args.device, jitter=args.jitter)
         runs = args.ref_runs or len(images)
         what = f"the path tracer here, {runs} runs x {args.frames} frames x {args.ref_spp} spp"
         print(f"rendering the reference: {what}", file=sys.stderr)
@@ -144,7 +145,7 @@ def run(args) -> int:
         check_output(args.zmap, "--zmap", tuple(IMAGE_FORMATS))
     scene = load_scene(args.scene, args.defines, console(), args.missing_textures)
     common = dict(frames=args.frames, width=args.width, height=args.height, device=args.device,
-                  camera_motion=args.camera_motion, camera_speed=args.camera_speed)
+                  camera_motion=args.camera_motion, camera_speed=args.camera_speed, jitter=args.jitter)
     depth = args.max_depth
     fixed = METHODS[args.method].FIXED_MAX_DEPTH if args.method in METHODS else None
     if depth is None and fixed is not None:

@@ -31,6 +31,10 @@ class CompareConfig:
     and the last frame are denoised by Intel Open Image Denoise (the `pyoidn` package, the
     `denoise` extra) with albedo and normal guides (restir/aov.py), the real-time use of ReSTIR.
 
+    jitter False: every method and the path-traced reference put their primary rays through the
+    pixel centres (RenderConfig.jitter; the Suffix ReSTIR paper's setting); a Mitsuba reference
+    cannot (Mitsuba always samples the pixel), so that pair is refused.
+
     workers (default: one per core, and at equal time 1 for the methods) > 1 or ray: independent
     renders run as tasks (restir/fanout.py): the methods (equal samples or frames only: an
     equal-time comparison needs each method alone on the machine; their ms per frame are then
@@ -54,6 +58,7 @@ class CompareConfig:
     ray: str | None = None
     scene_file: str | None = None
     defines: dict | None = None
+    jitter: bool = True
 
     def validate(self) -> None:
         """Refuse a comparison that cannot run, before anything renders."""
@@ -73,6 +78,9 @@ class CompareConfig:
             raise ConfigError("--equal-time renders the methods one after another (each alone on the machine, or "
                               "its time would include the others' load); --workers and --ray apply to equal "
                               "samples or frames, and to the correlation runs")
+        if not self.jitter and self.reference == "mitsuba":
+            raise ConfigError("--no-jitter with --reference mitsuba: Mitsuba 3 always samples the pixel area, so "
+                              "its image is not the radiance at the pixel centres; use the path-traced reference")
         if self.frames < 1 or self.warmup < 0 or self.reference_spp < 1:
             raise ConfigError("frames and reference spp must be >= 1, warmup >= 0")
         if self.denoise:

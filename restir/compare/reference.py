@@ -75,10 +75,13 @@ def path_traced_reference(scene, spp: int, config: RenderConfig, progress=None) 
     frames = REFERENCE_FRAMES if spp >= REFERENCE_FRAMES else max(2, spp)
     per_frame = max(1, spp // frames)
     cfg = RenderConfig(method="pt", spp=per_frame, frames=frames, width=config.width, height=config.height,
-                       max_depth=config.max_depth, seed=0x5EF, device=config.device, keep_frames=True)
-    key_text = json.dumps({"scene": scene_digest(scene), "spp": per_frame, "frames": frames, "width": config.width,
-                           "height": config.height, "max_depth": config.max_depth, "seed": cfg.seed,
-                           "version": __version__}, sort_keys=True)
+                       max_depth=config.max_depth, seed=0x5EF, device=config.device, keep_frames=True,
+                       jitter=config.jitter)
+    key = {"scene": scene_digest(scene), "spp": per_frame, "frames": frames, "width": config.width,
+           "height": config.height, "max_depth": config.max_depth, "seed": cfg.seed, "version": __version__}
+    if not config.jitter:  # only then: the keys of references rendered before the option stay valid
+        key["jitter"] = False
+    key_text = json.dumps(key, sort_keys=True)
     return _cached(key_text, lambda path: f"pt {per_frame * frames} spp ({frames} frames; cache {path})",
                    lambda: render(scene, cfg, progress=progress).frame_images)
 

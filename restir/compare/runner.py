@@ -270,7 +270,7 @@ def compare(scene, methods, config: CompareConfig | None = None, *, progress=Non
                          + ", ".join(s.label for s in specs if METHODS[s.method].FIXED_MAX_DEPTH is not None))
         max_depth = depth
     base = RenderConfig(frames=10 ** 9 if c.equal_time is not None else c.frames, width=c.width, height=c.height,
-                        max_depth=max_depth, seed=c.seed, device=c.device)
+                        max_depth=max_depth, seed=c.seed, device=c.device, jitter=c.jitter)
     base.validate()
     check_device(base)
     sized = sized_scene(scene, base)

@@ -68,9 +68,11 @@ class Sweep:
 
 def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: int = 1, warmup: int = 4,
           reference: str | None = None, reference_spp: int = 1024, width=None, height=None, max_depth=None,
-          device: str = "cpu", workers: int | None = None, ray: str | None = None, progress=None) -> Sweep:
+          device: str = "cpu", workers: int | None = None, ray: str | None = None, jitter: bool = True,
+          progress=None) -> Sweep:
     """Render `method` at every point of `grid` (a list of --grid strings or of setting dicts) for
-    seeds 0..seeds-1, `frames` frames each, fanned out (workers / ray: see fanout.run_tasks)."""
+    seeds 0..seeds-1, `frames` frames each, fanned out (workers / ray: see fanout.run_tasks);
+    `jitter` as RenderConfig.jitter, for the reference too."""
     from ..api import check_device, sized_scene
     from ..fanout import run_tasks
 
@@ -78,7 +80,7 @@ def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: in
     if seeds < 1 or frames < 1 or spp < 1:
         raise ConfigError("seeds, frames and spp must be >= 1")
     base = RenderConfig(method=method, frames=frames, spp=spp, width=width, height=height, max_depth=max_depth,
-                        device=device, keep_frames=True)
+                        device=device, keep_frames=True, jitter=jitter)
     base.validate()
     check_device(base)
     sized = sized_scene(scene, base)

@@ -28,6 +28,11 @@ class Camera:
     filter_bins: int
     filter_stddev: float
     filter_inv_integral: float
+    # 1: a sample's offset from the pixel centre is drawn from the filter (the image is the
+    # filtered radiance, as in Mitsuba); 0: every primary ray goes through the pixel centre, so
+    # a pixel sees one fixed primary hit and the image is the radiance at the centres (aliased
+    # edges), as in the Suffix ReSTIR paper's evaluation. RenderConfig.jitter.
+    jitter: int
 
 
 @wp.struct
@@ -62,8 +67,11 @@ def sample_filter_1d(cam: Camera, u: float) -> wp.vec2:
 
 @wp.func
 def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
-    fx = sample_filter_1d(cam, u[0])
-    fy = sample_filter_1d(cam, u[1])
+    fx = wp.vec2(0.0, 1.0)
+    fy = wp.vec2(0.0, 1.0)
+    if cam.jitter != 0:
+        fx = sample_filter_1d(cam, u[0])
+        fy = sample_filter_1d(cam, u[1])
     sx = (float(px) + 0.5 + fx[0]) / float(cam.width)
     sy = (float(py) + 0.5 + fy[0]) / float(cam.height)
     d_local = wp.vec3((1.0 - 2.0 * sx) * cam.tan_half_x, (1.0 - 2.0 * sy) * cam.tan_half_y, 1.0)

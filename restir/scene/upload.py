@@ -62,11 +62,13 @@ def bump_struct(b) -> Bump:
 class DeviceScene:
     """Owns every device array of one scene; `.scene` and `.camera` are the kernel arguments."""
 
-    def __init__(self, scene: Scene, device: str = "cpu", tracer: str = "auto"):
-        """tracer: "embree" (CPU only), "warp", or "auto" (Embree on the CPU when available)."""
+    def __init__(self, scene: Scene, device: str = "cpu", tracer: str = "auto", jitter: bool = True):
+        """tracer: "embree" (CPU only), "warp", or "auto" (Embree on the CPU when available);
+        jitter: False puts every primary ray through its pixel centre (Camera.jitter)."""
         self.host = scene
         self.device = device
         self.tracer = tracer
+        self.jitter = jitter
         self._arrays = []
         self.scene = self._scene_struct(scene)
         self.camera = self.camera_struct(scene.camera)
@@ -193,6 +195,7 @@ class DeviceScene:
         c.filter_cdf = self._arr(cdf_1d(bins).astype(np.float32), float)
         c.filter_bins = n
         c.filter_inv_integral = float(1.0 / bins.sum())
+        c.jitter = int(self.jitter)
         return c
 
     def camera_at(self, to_world: np.ndarray) -> Camera:
@@ -200,7 +203,7 @@ class DeviceScene:
         c = Camera()
         base = self.camera
         for name in ("tan_half_x", "tan_half_y", "width", "height", "filter", "filter_radius", "filter_cdf",
-                     "filter_bins", "filter_stddev", "filter_inv_integral"):
+                     "filter_bins", "filter_stddev", "filter_inv_integral", "jitter"):
             setattr(c, name, getattr(base, name))
         c.to_world = wp.mat44(*np.asarray(to_world, np.float32).reshape(-1))
         c.to_local = wp.mat44(*np.linalg.inv(to_world).astype(np.float32).reshape(-1))

@@ -21,7 +21,7 @@ import pytest
 
 import restir
 from restir.validation import IndependentRuns
-from tests.helpers import check
+from tests.helpers import MATRIX_CAMERAS, check
 from tests.scenes import bump_scene, half_dark_scene, mask_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
@@ -53,8 +53,8 @@ MATRIX = {
     "C4-k8-radius-10": ({"spatial.neighbors": 8, "spatial.radius": 10.0}, "none"),
     "C4-orbit": ({}, "orbit"),
     "C4-dolly": ({}, "dolly"),
+    "C4-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
 }
-CAMERA_SPEED = {"none": 1.0, "orbit": 3.0, "dolly": 0.02}
 SCENES = ["features", "half-dark", "shadow", "cornell-box-glossy"]
 # Per scene: settings under every configuration's own (half-dark keeps one light candidate, so
 # that about half of the canonical samples are zero), and ReSTIR DI's spp per frame (in the
@@ -81,8 +81,9 @@ def scene(name):
 
 
 def runs(name, method, spp, seed0, motion="none", settings=None):
+    motion, speed, jitter = MATRIX_CAMERAS[motion]
     cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=2,
-                              camera_motion=motion, camera_speed=CAMERA_SPEED[motion], settings=settings or {})
+                              camera_motion=motion, camera_speed=speed, jitter=jitter, settings=settings or {})
     return IndependentRuns(scene(name), cfg, RUNS, seed0)
 
 

@@ -39,6 +39,7 @@ MATRIX = {
     "C4-k8-rounds-2": ({"spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     "C4-orbit": ({}, "orbit"),
     "C4-dolly": ({}, "dolly"),
+    "C4-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
 }
 
 

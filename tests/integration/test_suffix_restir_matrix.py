@@ -25,6 +25,7 @@ MATRIX = {
     "C5-all": ({}, "none"),
     "C5-orbit": ({}, "orbit"),
     "C5-dolly": ({}, "dolly"),
+    "C5-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
     "C5-reconnection": ({"shift": "reconnection"}, "none"),
     "C5-replay": ({"shift": "replay"}, "none"),
     "C5-direct-pt": ({"direct": "pt"}, "none"),
