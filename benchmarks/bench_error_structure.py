@@ -32,6 +32,8 @@ SCENES = [  # (name, scene, aspect width/height, methods, max_depth)
     ("veach-mis", "veach-mis", 16 / 9, FULL, None),
     ("veach-mis, depth 2", "veach-mis", 16 / 9, DIRECT, 2),
     ("cornell-box (shared), depth 2", "cornell-box", 1.0, DIRECT, 2),
+    ("veach-ajar", "veach-ajar", 16 / 9, FULL, None),
+    ("staircase2", "staircase2", 16 / 9, FULL, None),
 ]
 
 
@@ -39,7 +41,7 @@ def load(spec):
     if spec.startswith("builtin:"):
         return restir.load_scene(spec)
     root = os.environ.get("RESTIR_SCENES") or os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes")
-    return restir.load_scene(os.path.join(root, spec, "scene.xml"))
+    return restir.load_scene(os.path.normpath(os.path.join(root, spec, "scene.xml")))
 
 
 def main():
@@ -50,6 +52,7 @@ def main():
     ap.add_argument("--runs", type=int, default=8, help="independent runs for the radial correlation")
     ap.add_argument("--only", nargs="*", help="scene names to run (default: all)")
     ap.add_argument("--out", default="out/bench_error_structure.json")
+    ap.add_argument("--report", metavar="DIR", help="also write each scene's HTML report into DIR/<scene>")
     args = ap.parse_args()
     rows = []
     for name, spec, aspect, methods, depth in SCENES:
@@ -60,6 +63,10 @@ def main():
         r = compare(load(spec), methods, equal_time=args.seconds, width=w, height=h, max_depth=depth,
                     reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs)
         heads = {x["method"]: x for x in r.headline}
+        if args.report:
+            from restir.compare.report import write_report
+
+            write_report(r, os.path.join(args.report, name.replace(" ", "_").replace(",", "")))
         print(f"\n## {name} ({w}x{h}; reference's own relMSE {r.reference.own_relmse():.3g})")
         for note in r.notes:
             print("note:", note)
