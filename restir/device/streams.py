@@ -125,7 +125,7 @@ PT_MAX_NEIGHBORS = DI_MAX_NEIGHBORS
 # {0: the current prefix's selection, 1: the history's}; suffix temporal and spatial reuse: as
 # ReSTIR PT's. Gather fallback: slot m of prefix i of sample s uses
 # (s * SR_MAX_GATHER_PREFIXES + i) * SR_FALLBACK_DIMS_PER_PREFIX + 2 m + {0, 1} (the disk offset).
-SR_MAX_GATHER_PREFIXES = wp.constant(16)
+SR_MAX_GATHER_PREFIXES = wp.constant(128)  # the paper's largest N (16 before: renders at spp > 1 drew other numbers)
 SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
 SR_FALLBACK_DIMS_PER_PREFIX = wp.constant(16)
 SR_MAX_GATHER_SUFFIXES = 8

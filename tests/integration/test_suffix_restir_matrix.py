@@ -7,8 +7,9 @@ Configurations: the final gather alone (prefix and suffix reuse off) for N in {1
 and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
 reconnection and replay shifts; direct=pt; the pairwise gather; prefixes ending exactly at x3
-(non-adaptive); a canonical suffix for every prefix; the fixed search radius; on the bump-map
-scene, the cells of BUMP_CELLS. Welch z per channel at image,
+(non-adaptive); a canonical suffix for every prefix; the fixed search radius; pixel-centre
+primary rays; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and mask
+scenes, the cells of BUMP_CELLS. Welch z per channel at image,
 tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
@@ -46,6 +47,20 @@ BUMP_CELLS = ["C5-gather-N2-M4", "C5-prefix-temporal", "C5-suffix-spatial", "C5-
 @pytest.mark.parametrize("name", FULL_MATRIX_SCENES)
 def test_suffix_restir_matrix(name, config):
     settings, motion = MATRIX[config]
+    print(config, end=" ")
+    run_cell(name, "suffix-restir", settings, motion, config)
+
+
+# N = 128 gathered prefixes, the paper's largest, with every reuse on: on the scenes where a cell
+# costs minutes (at 32x32 a frame traces about 1,500 gather rays a pixel)
+MANY_PREFIXES = {"C5-all-N128": ({"gather.prefixes": 128}, "none")}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", list(MANY_PREFIXES))
+@pytest.mark.parametrize("name", ["sphere-cap", "cornell-box-glossy", "indirect-room"])
+def test_suffix_restir_matrix_many_prefixes(name, config):
+    settings, motion = MANY_PREFIXES[config]
     print(config, end=" ")
     run_cell(name, "suffix-restir", settings, motion, config)
 

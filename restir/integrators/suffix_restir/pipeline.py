@@ -74,7 +74,8 @@ class SuffixSettings(PathReuseSettings):
                                          "(absolute; <= 0: no cap)")
     suffix_spatial: SpatialReuseSettings = spatial_reuse("suffix.spatial.", radius_at_1080=SPATIAL_RADIUS_1080,
                                                          doc_prefix="suffix ")
-    gather_prefixes: int = setting("gather.prefixes", 4, "N: fresh prefixes per pixel in the final gather")
+    gather_prefixes: int = setting("gather.prefixes", 4, "N: fresh prefixes per pixel in the final gather "
+                                   f"(1-{SR_MAX_GATHER_PREFIXES}; the paper evaluates up to 128)")
     gather_suffixes: int = setting("gather.suffixes", 1, "M: neighbour suffixes gathered per prefix "
                                    f"(1-{SR_MAX_GATHER_SUFFIXES})")
     gather_mis: str = setting("gather.mis", "talbot", "talbot (generalized balance over neighbours and the "
