@@ -80,19 +80,9 @@ def mitsuba_side(path: str, variant: str) -> dict:
     import mitsuba as mi
 
     mi.set_variant(variant)
-    from tests.data.make_mitsuba_references import MITSUBA_REFUSES
+    from tests.data.make_mitsuba_references import mitsuba_readable
 
-    text = open(path).read()
-    if MITSUBA_REFUSES.search(text):  # a copy beside links to the scene's folders
-        import tempfile
-
-        tmp, folder = tempfile.mkdtemp(), os.path.dirname(os.path.abspath(path))
-        for entry in os.listdir(folder):
-            os.symlink(os.path.join(folder, entry), os.path.join(tmp, entry))
-        os.remove(os.path.join(tmp, os.path.basename(path)))
-        path = os.path.join(tmp, os.path.basename(path))
-        with open(path, "w") as f:
-            f.write(MITSUBA_REFUSES.sub("", text))
+    path = mitsuba_readable(path)
     mi.set_log_level(mi.LogLevel.Info)
     rss0 = rss_bytes()
     t0 = time.perf_counter()

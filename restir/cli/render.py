@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
     r.add_argument("--width", type=int, help="image width in pixels (default: the scene's)")
     r.add_argument("--height", type=int, help="image height in pixels (default: the scene's)")
     r.add_argument("--max-depth", type=int, help="Mitsuba's max_depth, -1: unbounded (default: the scene's; "
-                   "restir-di computes 2 only; restir-pt and suffix-restir up to 64)")
+                   "restir-di computes 2 only; restir-pt and suffix-restir up to 255, -1 as 64)")
     r.add_argument("--seed", type=int, default=0, help="random seed")
     device_option(r)
     jitter_option(r)

@@ -39,23 +39,30 @@ REFERENCES = {
 MITSUBA_REFUSES = re.compile(r"<boolean name=\"(high_quality_edges|highQualityEdges)\"[^>]*/>")
 
 
-def load_for_mitsuba(mi, path, resx, resy, depth, spp):
-    """The scene as Mitsuba 3 renders it at the given settings, and the integrator to render with.
-    A scene without resx/resy/max_depth/spp parameters (as distributed) gets its film resized and
-    a path integrator of that depth; options Mitsuba refuses are dropped from a copy beside links
-    to the scene's folders."""
+def mitsuba_readable(path: str) -> str:
+    """`path`, or, when it holds options Mitsuba 3 refuses (MITSUBA_REFUSES), a copy without them
+    in a temporary folder beside links to the scene's files."""
     import tempfile
 
     text = open(path).read()
-    if MITSUBA_REFUSES.search(text):
-        tmp = tempfile.mkdtemp()
-        folder = os.path.dirname(path)
-        for entry in os.listdir(folder):
-            os.symlink(os.path.join(folder, entry), os.path.join(tmp, entry))
-        os.remove(os.path.join(tmp, os.path.basename(path)))
-        path = os.path.join(tmp, os.path.basename(path))
-        with open(path, "w") as f:
-            f.write(MITSUBA_REFUSES.sub("", text))
+    if not MITSUBA_REFUSES.search(text):
+        return path
+    tmp, folder = tempfile.mkdtemp(), os.path.dirname(os.path.abspath(path))
+    for entry in os.listdir(folder):
+        os.symlink(os.path.join(folder, entry), os.path.join(tmp, entry))
+    os.remove(os.path.join(tmp, os.path.basename(path)))
+    copy = os.path.join(tmp, os.path.basename(path))
+    with open(copy, "w") as f:
+        f.write(MITSUBA_REFUSES.sub("", text))
+    return copy
+
+
+def load_for_mitsuba(mi, path, resx, resy, depth, spp):
+    """The scene as Mitsuba 3 renders it at the given settings, and the integrator to render with.
+    A scene without resx/resy/max_depth/spp parameters (as distributed) gets its film resized and
+    a path integrator of that depth; options Mitsuba refuses are dropped (mitsuba_readable)."""
+    path = mitsuba_readable(path)
+    text = open(path).read()
     if "$resx" in text:
         return mi.load_file(path, resx=resx, resy=resy, max_depth=depth, spp=spp), None
     scene = mi.load_file(path)
