@@ -49,7 +49,7 @@ class Neighbor:
     sh: Shading
 
 
-@wp.func
+@wp.func(inline=True)  # as load_shading: out of line it copies SceneDevice and a Shading
 def temporal_neighbor(scene: SceneDevice, prev_camera: Camera, prev_gb: GBuffer, sc: Shading) -> Neighbor:
     """The temporal technique of a pixel with primary hit sc: the previous frame's pixel that saw
     the same point, if it had a primary hit there and the two surfaces are similar."""
@@ -62,7 +62,7 @@ def temporal_neighbor(scene: SceneDevice, prev_camera: Camera, prev_gb: GBuffer,
     return n
 
 
-@wp.func
+@wp.func(inline=True)  # as load_shading
 def spatial_technique(scene: SceneDevice, gb: GBuffer, u: wp.vec2, pixel: int, width: int, height: int,
                       radius: float, sc: Shading) -> Neighbor:
     """One spatial technique of a pixel with primary hit sc: a pixel drawn in the disk

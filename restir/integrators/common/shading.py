@@ -19,7 +19,12 @@ class Shading:
     mat: Material
 
 
-@wp.func
+# Forced inline (as temporal_neighbor and spatial_technique, reuse_domains.py): Warp passes structs
+# by value, so out of line each call copies the whole SceneDevice (about 1 KB) and returns a
+# Shading. The opacity-mask lookup in material_at pushed this function out of line under the CPU
+# compiler's inlining budget, and ReSTIR DI's visibility, temporal, spatial and shade stages took
+# 1.3-1.8x as long (BENCHMARKS.md, "A function left out of line").
+@wp.func(inline=True)
 def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     s = Shading()
     tri = gb.tri[pixel]
