@@ -40,6 +40,14 @@ def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     return s
 
 
+@wp.func(inline=False)
+def load_shading_outlined(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
+    """load_shading kept out of line, for a kernel that calls it once before a long loop (ReSTIR
+    DI's initial candidates): one copy per pixel, and the loop's code stays compact; inlined
+    there, the stage took 6% longer (BENCHMARKS.md, "A function left out of line")."""
+    return load_shading(scene, gb, pixel)
+
+
 @wp.func
 def similar_surfaces(a: Shading, b: Shading) -> bool:
     """Neighbour test on geometry only (ReSTIR PT's): normals within 60 deg, depth within 10%."""

@@ -28,7 +28,7 @@ from ...device.types import ENV_NONE, LIGHT_ENV
 from ...resampling.ris import ris_finalize, ris_init, ris_stream
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.shading import Shading, load_shading
+from ..common.shading import Shading, load_shading_outlined
 from .params import DIParams
 from .reservoir import (DIReservoir, candidate_densities, empty_reservoir, on_triangle, store,
                         unshadowed_contribution)
@@ -79,7 +79,7 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffe
     out = empty_reservoir()
     s = ris_init()
     rays = int(0)
-    sh = load_shading(scene, gb, pixel)
+    sh = load_shading_outlined(scene, gb, pixel)
     if sh.valid != 0 and bsdf_is_delta_only(sh.mat) == 0:
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
