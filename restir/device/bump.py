@@ -32,7 +32,7 @@ class Bump:
     shadowing: int      # Mitsuba's `use_shadowing_function`
 
 
-@wp.func
+@wp.func(inline=False)  # out of line as scene_device.texture_lookup: only bump-mapped hits call it
 def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2), textures: wp.array(dtype=Texture),
                 texels: wp.array(dtype=wp.vec3), b: Bump, tri: int, uv: wp.vec2, ng: wp.vec3, ns: wp.vec3,
                 wi: wp.vec3) -> wp.vec3:

@@ -49,10 +49,19 @@ class SceneDevice:
     tex_pixels: wp.array(dtype=wp.vec3)
 
 
+@wp.func(inline=False)
+def texture_lookup(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), tex: int, uv: wp.vec2) -> wp.vec3:
+    """texture_eval kept out of line. With it and bump.bump_normal out of line, material_at becomes
+    small enough to be inlined at the path vertices of the reuse passes; out of line, it copied
+    SceneDevice at every call (BENCHMARKS.md, "A function left out of line"). A textured hit pays
+    a call instead."""
+    return texture_eval(textures, texels, tex, uv)
+
+
 @wp.func
 def texture_or_constant(scene: SceneDevice, tex: int, uv: wp.vec2, constant: wp.vec3) -> wp.vec3:
     if tex >= 0:
-        return texture_eval(scene.textures, scene.tex_pixels, tex, uv)
+        return texture_lookup(scene.textures, scene.tex_pixels, tex, uv)
     return constant
 
 
@@ -69,5 +78,5 @@ def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     m.specular_reflectance = texture_or_constant(scene, tex[1], uv, m.specular_reflectance)
     m.specular_transmittance = texture_or_constant(scene, tex[2], uv, m.specular_transmittance)
     if tex[3] >= 0:  # a mask's opacity: the texture's eval_1, clipped to [0, 1] as in Mitsuba
-        m.opacity = wp.clamp(scalar_of(texture_eval(scene.textures, scene.tex_pixels, tex[3], uv)), 0.0, 1.0)
+        m.opacity = wp.clamp(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[3], uv)), 0.0, 1.0)
     return m
