@@ -51,6 +51,8 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--runs", type=int, default=8, help="independent runs for the radial correlation")
     ap.add_argument("--only", nargs="*", help="scene names to run (default: all)")
+    ap.add_argument("--methods", nargs="*", help="methods to compare on every scene, 'name:key=value,...' "
+                    "(default: the scene's own list)")
     ap.add_argument("--out", default="out/bench_error_structure.json")
     ap.add_argument("--report", metavar="DIR", help="also write each scene's HTML report into DIR/<scene>")
     args = ap.parse_args()
@@ -60,7 +62,7 @@ def main():
             continue
         h = args.lines
         w = int(round(h * aspect / 2)) * 2
-        r = compare(load(spec), methods, equal_time=args.seconds, width=w, height=h, max_depth=depth,
+        r = compare(load(spec), args.methods or methods, equal_time=args.seconds, width=w, height=h, max_depth=depth,
                     reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs)
         heads = {x["method"]: x for x in r.headline}
         if args.report:

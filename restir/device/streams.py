@@ -20,6 +20,7 @@ STAGE_DI_SPATIAL = wp.constant(20)  # + round index, round < MAX_SPATIAL_ROUNDS
 STAGE_PT_PATHS = wp.constant(30)     # ReSTIR PT's base paths (keyed further by sample and candidate)
 STAGE_PT_RIS = wp.constant(31)       # ReSTIR PT's streaming-RIS selections (never the paths' stream)
 STAGE_PT_TEMPORAL = wp.constant(32)
+STAGE_PT_MCMC = wp.constant(33)       # ReSTIR PT's MCMC suffix mutations (keyed further by sample and step)
 STAGE_PT_SPATIAL = wp.constant(40)   # + round index, round < MAX_SPATIAL_ROUNDS
 STAGE_SR_PREFIX = wp.constant(50)           # Suffix ReSTIR: the prefixes traced for temporal prefix reuse
 STAGE_SR_PREFIX_TEMPORAL = wp.constant(51)  # its selections
@@ -47,6 +48,7 @@ STAGE_RANGES = (
     ("pt_paths", STAGE_PT_PATHS, 1),
     ("pt_ris", STAGE_PT_RIS, 1),
     ("pt_temporal", STAGE_PT_TEMPORAL, 1),
+    ("pt_mcmc", STAGE_PT_MCMC, 1),
     ("pt_spatial", STAGE_PT_SPATIAL, MAX_SPATIAL_ROUNDS),
     ("sr_prefix", STAGE_SR_PREFIX, 1),
     ("sr_prefix_temporal", STAGE_SR_PREFIX_TEMPORAL, 1),
@@ -117,6 +119,12 @@ PT_MAX_CANDIDATES = 64
 PT_TEMPORAL_DIMS_PER_SAMPLE = wp.constant(4)
 # spatial: as ReSTIR DI's (one stream per round)
 PT_MAX_NEIGHBORS = DI_MAX_NEIGHBORS
+# MCMC suffix mutations: one key per (pixel, sample, step) (rng_key of STAGE_PT_MCMC combined with
+# sample * PT_MAX_MCMC_STEPS + step); the proposed suffix draws the base paths' per-bounce layout
+# from the rc vertex on, and the acceptance number is dimension PT_MCMC_DIM_ACCEPT, below every
+# bounce's numbers
+PT_MAX_MCMC_STEPS = 8
+PT_MCMC_DIM_ACCEPT = wp.constant(0)
 
 # ----------------------------------------------------------------------------- Suffix ReSTIR
 # Prefixes and suffixes are keyed per path as ReSTIR PT's base paths (their bounce layout, the
@@ -150,6 +158,10 @@ DIM_LAYOUTS = (
     ("pt_ris", DIMS_PER_SAMPLE,
      [(v * PT_RIS_DIMS_PER_VERTEX + o, 1) for v in range(MAX_SEGMENTS) for o in (PT_RIS_DIM_NEE, PT_RIS_DIM_EMISSION)]),
     ("pt_temporal", PT_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
+    ("pt_mcmc", DIMS_PER_SAMPLE,
+     [(PT_MCMC_DIM_ACCEPT, 1)] + [(b * DIMS_PER_BOUNCE + o, n) for b in range(1, MAX_SEGMENTS + 1)
+                                  for o, n in ((DIM_LIGHT_SELECT, 1), (DIM_LIGHT_POINT, 2), (DIM_BSDF_LOBE, 1),
+                                               (DIM_BSDF_DIR, 2))]),
     ("pt_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
      [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(PT_MAX_NEIGHBORS)
       for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),

@@ -19,7 +19,7 @@ import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns
 from tests.helpers import SPHERE_CAP as CAP
-from tests.helpers import ANALYTIC_REL_TOL, check
+from tests.helpers import ANALYTIC_REL_TOL, check, paired_difference
 from tests.helpers import sphere_cap as sphere
 
 
@@ -37,7 +37,7 @@ def check_sphere(settings, max_depth=4, k=32, frames=16, bound=0.015, allow_muta
     r = runs(sphere(), settings, k, frames, max_depth, allow_mutation=allow_mutation)
     rep = check(r, sphere_cap_radiance(CAP["albedo"], CAP["radiance"], CAP["phi"], max_depth),
                 rel_tol=ANALYTIC_REL_TOL)
-    print(settings, f"MDB {rep.mdb:.4f}", r.stats[0]["shifts"], r.stats[0]["final_samples"])
+    print(settings, f"MDB {rep.mdb:.4f}", r.stats[0]["shifts"], r.stats[0]["final_samples"], r.stats[0].get("mcmc"))
     assert rep.mdb < bound
     return r
 
@@ -53,6 +53,8 @@ SPHERE = {
     "replay": {"shift": "replay", "direct": "pt"},
     "spatial-k8-rounds-3": {"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3},
     "temporal-no-cap": ({"temporal.cap": 0.0, "spatial.rounds": 0}, SLOW),
+    "mcmc-z": {"mcmc.steps": 2},
+    "mcmc-rc-prev": {"mcmc.steps": 2, "mcmc.start": "rc_prev"},
 }
 
 
@@ -132,6 +134,41 @@ def test_dropping_failed_shifts_is_caught():
     m = runs(indirect_room(), {**settings, "debug.mutation": "drop_failed_shifts"}, 64, 16, 3, allow_mutation=True)
     with pytest.raises(AssertionError):
         check(m, ref.image, ref.batch_variance_of_mean, other=ref, tile=4)
+
+
+# MCMC suffix mutations (mcmc.steps, restir_pt/s3_mcmc.py) must change nothing on average: each
+# configuration with mutations against the same configuration and seeds without them, run by run
+# (tests/helpers.paired_difference), 64 runs x 16 frames at 16x16, max_depth 4: the sphere above
+# has one value everywhere, so its mutations barely move anything; these two scenes have colour,
+# glossy lobes and 40-75% accepted proposals.
+MCMC_SCENES = ["builtin:cornell-box-glossy", "builtin:indirect-room"]
+MCMC_BASES = {"defaults": {}, "direct-pt": {"direct": "pt"},
+              "spatial-k8-rounds-2": {"direct": "pt", "temporal": False, "spatial.neighbors": 8, "spatial.rounds": 2}}
+
+
+def mcmc_paired(scene_spec, base, extra, allow_mutation=False):
+    scene = restir.load_scene(scene_spec, width=16, height=16)
+    b = runs(scene, base, 64, 16, 4)
+    a = runs(scene, {**base, **extra}, 64, 16, 4, allow_mutation=allow_mutation)
+    print(scene_spec, base, extra, a.stats[0]["mcmc"])
+    return check(paired_difference(a, b), b.image, tile=4)
+
+
+@pytest.mark.parametrize("start", ["z", "rc_prev"])
+@pytest.mark.parametrize("base", [pytest.param(k, marks=SLOW) if k == "direct-pt" else k for k in MCMC_BASES])
+@pytest.mark.parametrize("scene", MCMC_SCENES)
+def test_mcmc_mutations_change_nothing_on_average(scene, base, start):
+    rep = mcmc_paired(scene, MCMC_BASES[base], {"mcmc.steps": 2, "mcmc.start": start})
+    assert rep.mdb < 0.02
+
+
+@pytest.mark.parametrize("scene", MCMC_SCENES)
+def test_mcmc_without_the_weight_update_is_caught(scene):
+    """W kept on acceptance: accepted proposals are the brighter ones, so the image brightens
+    (measured 3.5-14% here)."""
+    with pytest.raises(AssertionError):
+        mcmc_paired(scene, MCMC_BASES["spatial-k8-rounds-2"], {"mcmc.steps": 2, "debug.mutation": "mcmc_keep_w"},
+                    allow_mutation=True)
 
 
 def test_harness_refuses_mutations():

@@ -40,6 +40,11 @@ MATRIX = {
     "C4-orbit": ({}, "orbit"),
     "C4-dolly": ({}, "dolly"),
     "C4-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
+    # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
+    "C6-mcmc-z": ({"mcmc.steps": 2}, "none"),
+    "C6-mcmc-rc-prev": ({"mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),
+    "C6-mcmc-rc-prev-spatial": ({**SPATIAL, "mcmc.steps": 4, "mcmc.start": "rc_prev"}, "none"),
+    "C6-mcmc-orbit": ({"mcmc.steps": 1, "mcmc.start": "rc_prev"}, "orbit"),
 }
 
 

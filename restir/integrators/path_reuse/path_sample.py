@@ -109,6 +109,18 @@ def lobe_at_rc(flags: int) -> int:
 
 
 @wp.func
+def with_lobe_at_rc(flags: int, lobe: int) -> int:
+    """flags with the lobe at z replaced (an MCMC mutation samples z's lobe afresh)."""
+    return (flags & ~(7 << 19)) | (lobe_code(lobe) << 19)
+
+
+@wp.func
+def with_lobe_at_rc_prev(flags: int, lobe: int) -> int:
+    """flags with the lobe at rcPrev replaced (a mutation that moves z samples it afresh)."""
+    return (flags & ~(7 << 16)) | (lobe_code(lobe) << 16)
+
+
+@wp.func
 def ends_with_nee(flags: int) -> int:
     return (flags >> 22) & 1
 

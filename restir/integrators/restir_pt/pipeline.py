@@ -1,5 +1,6 @@
 """ReSTIR PT as a pipeline of stages: primary hits, ReSTIR DI (direct light at the primary hit,
-unless direct=pt), trace and initial RIS, temporal reuse, spatial reuse rounds, shading.
+unless direct=pt), trace and initial RIS, temporal reuse, MCMC suffix mutations (mcmc.steps > 0),
+spatial reuse rounds, shading.
 
 render_sample is the table of contents; each stage is one kernel in its own file.
 """
@@ -8,7 +9,9 @@ import functools
 
 import numpy as np
 
+from ...device.streams import PT_MAX_MCMC_STEPS
 from ...settings import MUTATION_DOC, setting
+from ..base import Integrator
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -19,22 +22,31 @@ from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
 from ..path_reuse.shift import make_shift
 from .s1_initial import initial_kernel, make_initial_kernel
 from .s2_temporal import make_temporal_kernel, temporal_kernel
-from .s3_spatial import make_spatial_kernel, spatial_kernel
-from .s4_shade import shade_kernel
+from .s3_mcmc import MUTATIONS as MCMC_MUTATIONS
+from .s3_mcmc import make_mcmc_kernel, mcmc_kernel
+from .s4_spatial import make_spatial_kernel, spatial_kernel
+from .s5_shade import shade_kernel
 
 
 def _shift_mutant(mutation: str) -> tuple:
     shift, module = make_shift(mutation), f"restir_pt_{mutation}"
-    return initial_kernel, make_temporal_kernel(shift, module=module), make_spatial_kernel(shift, module=module)
+    return (initial_kernel, make_temporal_kernel(shift, module=module), mcmc_kernel,
+            make_spatial_kernel(shift, module=module))
+
+
+def _mcmc_mutant(mutation: str) -> tuple:
+    return initial_kernel, temporal_kernel, make_mcmc_kernel(mutation, f"restir_pt_mcmc_{mutation}"), spatial_kernel
 
 
 # Fault injections for the mutation tests (common/mutations.py), each a build of the (initial,
-# temporal, spatial) kernels or, for the race, of the pipeline.
-MUTATIONS = Mutations((initial_kernel, temporal_kernel, spatial_kernel), {
+# temporal, mcmc, spatial) kernels or, for the race, of the pipeline.
+MUTATIONS = Mutations((initial_kernel, temporal_kernel, mcmc_kernel, spatial_kernel), {
     **{m: functools.partial(_shift_mutant, m) for m in SHIFT_MUTATIONS},
-    "m_per_event": lambda: (make_initial_kernel(m_per_event=True), temporal_kernel, spatial_kernel),
+    **{f"mcmc_{m}": functools.partial(_mcmc_mutant, m) for m in MCMC_MUTATIONS},
+    "m_per_event": lambda: (make_initial_kernel(m_per_event=True), temporal_kernel, mcmc_kernel, spatial_kernel),
     "drop_failed_shifts": lambda: (initial_kernel,
                                    make_temporal_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
+                                   mcmc_kernel,
                                    make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
 })
@@ -47,6 +59,11 @@ class PTSettings(PathReuseSettings):
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
     temporal_cap: float = setting("temporal.cap", 20.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x)")
+    mcmc_start: str = setting("mcmc.start", "z", "where an MCMC mutation redraws the path: z (after the reconnection "
+                              "vertex, which stays) or rc_prev (after the vertex before it: z moves too)")
+    mcmc_steps: int = setting("mcmc.steps", 0, "MCMC mutations of each pixel's sample per frame, after temporal and "
+                              "before spatial reuse: a fresh suffix after the reconnection vertex, accepted with "
+                              "min(1, p_hat ratio) (unbiased; decorrelates what spatial reuse copies; 0: off)")
     spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0)
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
@@ -58,8 +75,8 @@ class PTSettings(PathReuseSettings):
 class ReSTIRPT(PathReuseIntegrator):
     name = "restir-pt"
     STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "trace_initial",
-              "temporal", "spatial", "shade")
-    KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, spatial_kernel, shade_kernel)
+              "temporal", "mcmc", "spatial", "shade")
+    KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, mcmc_kernel, spatial_kernel, shade_kernel)
     Settings = PTSettings
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
     MUTATIONS = MUTATIONS
@@ -68,7 +85,13 @@ class ReSTIRPT(PathReuseIntegrator):
 
     @staticmethod
     def check_settings(settings: PTSettings) -> None:
+        from ...config import ConfigError
+
         ReSTIRPT.check_path_settings(settings)
+        if not 0 <= settings.mcmc_steps <= PT_MAX_MCMC_STEPS:
+            raise ConfigError(f"mcmc.steps must be in [0, {PT_MAX_MCMC_STEPS}]")
+        if settings.mcmc_start not in ("z", "rc_prev"):
+            raise ConfigError("mcmc.start must be z or rc_prev")
 
     def kernels(self) -> tuple:
         return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
@@ -76,6 +99,7 @@ class ReSTIRPT(PathReuseIntegrator):
     def allocate(self) -> None:
         self.allocate_path_reuse()
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
+        self.mcmc_counts = np.zeros(3, np.int64)  # samples with a suffix, valid proposals, accepted
 
     def params(self, frame: int, sample: int) -> PathReuseParams:
         s = self.settings
@@ -84,12 +108,15 @@ class ReSTIRPT(PathReuseIntegrator):
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
         mutation = self.settings.debug_mutation
-        initial, temporal, spatial = MUTATIONS.kernels(mutation)
+        initial, temporal, mcmc, spatial = MUTATIONS.kernels(mutation)
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         self.run_stage("trace_initial", initial, [sc, p, gb.current], [res.current])
         if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        if self.settings.mcmc_steps > 0:
+            self.mutation_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
+                                             int(self.settings.mcmc_start == "rc_prev"), gb.current])
         for rd in range(self.settings.spatial.rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
@@ -99,9 +126,17 @@ class ReSTIRPT(PathReuseIntegrator):
         self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins
         return self.sample_L
 
+    def mutation_pass(self, stage: str, kernel, inputs: list) -> None:
+        """The base class's ping-pong pass (a mutation pass has no shifts to count: its scratch
+        holds the mutation counts instead)."""
+        Integrator.reuse_pass(self, stage, kernel, inputs, (self.shift_events,))
+        self.tally.add(("mcmc",), self.shift_events)
+
     def take_tally(self, key, sums: np.ndarray) -> None:
         if key[0] == "origins":
             self.origins += sums[:3]
+        elif key[0] == "mcmc":
+            self.mcmc_counts += sums[:3]
         else:
             super().take_tally(key, sums)
 
@@ -112,4 +147,9 @@ class ReSTIRPT(PathReuseIntegrator):
         total = self.origins.sum()
         out["final_samples"] = {k: float(v / total) if total else 0.0
                                 for k, v in zip(("canonical", "temporal", "spatial"), self.origins)}
+        if self.settings.mcmc_steps > 0:
+            samples, valid, accepted = (int(v) for v in self.mcmc_counts)
+            proposals = samples * int(self.settings.mcmc_steps)
+            out["mcmc"] = {"samples": samples, "proposals": proposals, "valid_proposals": valid, "accepted": accepted,
+                           "acceptance_rate": accepted / proposals if proposals else None}
         return out

@@ -1,4 +1,4 @@
-"""Stage 3, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3).
+"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3).
 
 Neighbours: k pixels drawn uniformly in a disk of `spatial_radius` pixels, kept when on screen,
 with a primary hit and geometrically similar (G-buffers only, never reservoir contents). For

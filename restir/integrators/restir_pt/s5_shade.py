@@ -1,4 +1,4 @@
-"""Stage 4, shading: a pixel's sample of the image, L = direct + F(Y) W x (filter weight).
+"""Stage 5, shading: a pixel's sample of the image, L = direct + F(Y) W x (filter weight).
 
 `direct` is what ReSTIR PT does not resample: ReSTIR DI's output (emission seen directly and
 direct light at the primary hit) with direct=restir-di, or the directly seen emission alone with
