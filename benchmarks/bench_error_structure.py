@@ -50,6 +50,7 @@ def main():
     ap.add_argument("--lines", type=int, default=128, help="image height")
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--runs", type=int, default=8, help="independent runs for the radial correlation")
+    ap.add_argument("--seed", type=int, default=0, help="the methods' seed (the reference's is fixed)")
     ap.add_argument("--only", nargs="*", help="scene names to run (default: all)")
     ap.add_argument("--methods", nargs="*", help="methods to compare on every scene, 'name:key=value,...' "
                     "(default: the scene's own list)")
@@ -63,7 +64,7 @@ def main():
         h = args.lines
         w = int(round(h * aspect / 2)) * 2
         r = compare(load(spec), args.methods or methods, equal_time=args.seconds, width=w, height=h, max_depth=depth,
-                    reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs)
+                    reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs, seed=args.seed)
         heads = {x["method"]: x for x in r.headline}
         if args.report:
             from restir.compare.report import write_report
@@ -87,7 +88,7 @@ def main():
             print(f"| {name} | {m.label} | {x['ms_per_frame']:.1f} | {x['relmse_frame']:.3g} | "
                   f"{x['relmse_denoised_frame']:.3g} | {factor_text(hd.get('raw_frame')) if hd else ''} | "
                   f"{factor_text(hd.get('denoised_frame')) if hd else ''} | {x['correlation_factor']['8']:.2f} | "
-                  + " | ".join(f"{radial[r_]:.3f}" for r_ in (1, 4, 8, 16))
+                  + " | ".join("n/a" if radial[r_] is None else f"{radial[r_]:.3f}" for r_ in (1, 4, 8, 16))
                   + f" | {x['temporal_correlation']:.3f} | {x['relmse_accumulated']:.3g} |", flush=True)
         os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
         with open(args.out, "w") as f:

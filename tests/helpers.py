@@ -163,12 +163,12 @@ FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES if n not in PARTIAL_MATRIX_SCENES
 MATRIX_REFERENCE_SPP = {"veach-mis": 48}
 # Configurations whose tails need more runs than their scene's K (measured MDB at the scene's K):
 # direct=pt in the indirect room (7.3% at 64 x 16), the orbiting camera in veach-bidir (ReSTIR
-# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32); ReSTIR PT's defaults on the masks, whose per-run
+# PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32; with MCMC mutations 8.6%); ReSTIR PT's defaults on the masks, whose per-run
 # means are heavy-tailed (light through the blinds is found by BSDF sampling only; excess kurtosis
 # about 6): at 64 x 8 one tile read z = 5.45 (crit 4.93) while the image passed (z -0.5), and two
 # replicates with fresh seeds passed (max tile |z| 2.04 and 2.31; VALIDATION.md).
 MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
-               ("masks", "C4-defaults"): 128}
+               ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128}
 
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):
