@@ -1,12 +1,13 @@
 """Stage 3, MCMC suffix mutations (`mcmc.steps` > 0): each pixel's sample after temporal reuse
-gets a fixed number of Metropolis steps on its suffix after the rc vertex z
-(path_reuse/suffix_mutation.py; docs/decorrelation.md 2). A step proposes a fresh suffix,
+gets a fixed number of Metropolis steps on its path after the rc vertex z, or after rcPrev
+(`mcmc.start`; path_reuse/suffix_mutation.py; docs/decorrelation.md 2). A step proposes a fresh suffix,
 evaluates it in this pixel's domain with the shift (the sample's own domain: J = 1), and accepts
 with min(1, p_hat(Y) / p_hat(X)); on acceptance W becomes W p_hat(X) / p_hat(Y). M does not
 change (confidence is never a sample value), and neither does the number of steps: it is a
 setting, the same for every sample. The pixel's own estimate keeps its luminance (p_hat(Y) W_Y
 = p_hat(X) W_X); what changes is what spatial reuse and the next frame copy: a sample many
-pixels share gets a different suffix in each.
+pixels share gets a different suffix in each. Measured, that changes the error's correlation
+by no more than the run's noise (docs/decorrelation.md 3, BENCHMARKS.md), so it is off by default.
 
 Runs between temporal and spatial reuse, reading only the pixel's own reservoir.
 Reads: scene, G-buffer, reservoirs. Writes: reservoirs_out (ping-pong), counts (samples that have
