@@ -135,10 +135,15 @@ class PathReuseIntegrator(Integrator):
         else:
             super().take_tally(key, sums)
 
-    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False) -> None:
-        """The base class's ping-pong pass, with the pass's shift counts summed for the stats."""
+    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False, counts: tuple | None = None) -> None:
+        """The base class's ping-pong pass, with the per-pixel counts it writes to `shift_events`
+        summed for the stats: its shifts, or the tally key `counts` (a pass that counts something
+        else, such as the MCMC stage's proposals)."""
         super().reuse_pass(stage, kernel, inputs, (self.shift_events,), in_place)
-        self.count_shifts(stage)
+        if counts is None:
+            self.count_shifts(stage)
+        else:
+            self.tally.add(counts, self.shift_events)
 
     def render_sample(self, frame: int, sample: int, camera):
         """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the

@@ -62,38 +62,35 @@ def propose_suffix(scene: SceneDevice, params: PathReuseParams, r: PathReservoir
     j = path_length(flags)
     prev_rough = lobe_is_rough(y.mat, lobe_at_rc_prev(flags), params.rough_threshold)
     hit = y.hit
-    d = wp.vec3(0.0)  # rcPrev -> z
-    dist = float(0.0)
+    lobe_prev = int(0)
     if from_rc_prev != 0:
-        # a fresh scatter at rcPrev finds a new z; rcPrev must still not qualify (z must be
-        # the first vertex that does) and the segment's source terms of J are z's new ones
+        # a fresh scatter at rcPrev finds a new z; rcPrev must still not qualify (z must be the
+        # first vertex that does)
         sp = scatter_at(y.hit, y.mat, y.frame, y.wi, key, wp.uint32(0), rcl - 1)
         if sp.valid == 0:
             return out
         if qualifies_scatter_vertex(params, rcl - 1, y.dist_in, y.prev_rough != 0, y.mat, sp.bs.lobe):
             return out
+        lobe_prev = sp.bs.lobe
         hit = trace_closest(scene, sp.o, sp.d, T_MAX)
         out.rays += 1
         if hit.valid == 0:
             return out
-        seg = segment(y.hit.p, y.hit.ng, hit.p)
-        d = wp.vec3(seg[0], seg[1], seg[2])
-        dist = seg[3]
-        if dist <= 0.0:
-            return out
-        prev_rough = lobe_is_rough(y.mat, sp.bs.lobe, params.rough_threshold)
+    else:
+        hit = surface_at(scene, r.rc_tri, r.rc_bary[0], r.rc_bary[1], 0.0)
+    seg = segment(y.hit.p, y.hit.ng, hit.p)
+    d = wp.vec3(seg[0], seg[1], seg[2])  # rcPrev -> z
+    dist = seg[3]
+    if dist <= 0.0:
+        return out
+    if from_rc_prev != 0:
+        # the new z: its record, and the segment's source terms of J
+        prev_rough = lobe_is_rough(y.mat, lobe_prev, params.rough_threshold)
         out.r.rc_tri = hit.tri
         out.r.rc_bary = hit.bary
         out.r.rc_jac = wp.vec2(wp.abs(wp.dot(hit.ng, d)) / (dist * dist) * bsdf_pdf_lobes(
-            y.mat, y.wi, to_local(y.frame, d), sp.bs.lobe), r.rc_jac[1])
-        out.r.flags = with_lobe_at_rc_prev(flags, sp.bs.lobe)
-    else:
-        hit = surface_at(scene, r.rc_tri, r.rc_bary[0], r.rc_bary[1], 0.0)
-        seg = segment(y.hit.p, y.hit.ng, hit.p)
-        d = wp.vec3(seg[0], seg[1], seg[2])
-        dist = seg[3]
-        if dist <= 0.0:
-            return out
+            y.mat, y.wi, to_local(y.frame, d), lobe_prev), r.rc_jac[1])
+        out.r.flags = with_lobe_at_rc_prev(flags, lobe_prev)
     frame = shading_frame(scene, hit, -d)
     mat = material_at(scene, hit, frame)
     wi = to_local(frame, -d)

@@ -11,7 +11,6 @@ import numpy as np
 
 from ...device.streams import PT_MAX_MCMC_STEPS
 from ...settings import MUTATION_DOC, setting
-from ..base import Integrator
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -62,8 +61,8 @@ class PTSettings(PathReuseSettings):
     mcmc_start: str = setting("mcmc.start", "z", "where an MCMC mutation redraws the path: z (after the reconnection "
                               "vertex, which stays) or rc_prev (after the vertex before it: z moves too)")
     mcmc_steps: int = setting("mcmc.steps", 0, "MCMC mutations of each pixel's sample per frame, after temporal and "
-                              "before spatial reuse: a fresh suffix after the reconnection vertex, accepted with "
-                              "min(1, p_hat ratio) (unbiased; decorrelates what spatial reuse copies; 0: off)")
+                              "before spatial reuse: the path redrawn after mcmc.start, accepted with min(1, p_hat "
+                              "ratio) (unbiased; measured not to decorrelate the error, docs/decorrelation.md; 0: off)")
     spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0)
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
@@ -115,8 +114,8 @@ class ReSTIRPT(PathReuseIntegrator):
         if self.settings.temporal and self.prev_camera is not None:
             self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
         if self.settings.mcmc_steps > 0:
-            self.mutation_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
-                                             int(self.settings.mcmc_start == "rc_prev"), gb.current])
+            self.reuse_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
+                                           int(self.settings.mcmc_start == "rc_prev"), gb.current], counts=("mcmc",))
         for rd in range(self.settings.spatial.rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
@@ -125,12 +124,6 @@ class ReSTIRPT(PathReuseIntegrator):
                        [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
         self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins
         return self.sample_L
-
-    def mutation_pass(self, stage: str, kernel, inputs: list) -> None:
-        """The base class's ping-pong pass (a mutation pass has no shifts to count: its scratch
-        holds the mutation counts instead)."""
-        Integrator.reuse_pass(self, stage, kernel, inputs, (self.shift_events,))
-        self.tally.add(("mcmc",), self.shift_events)
 
     def take_tally(self, key, sums: np.ndarray) -> None:
         if key[0] == "origins":
