@@ -5,6 +5,7 @@ relMSE at equal time against the path tracer, each phase in one run.
     .venv/bin/python benchmarks/bench_restir_pt.py --phase quality   # 128x128, indirect room, veach-bidir, glossy box
     .venv/bin/python benchmarks/bench_restir_pt.py --phase cap       # the temporal cap, indirect room, 128x128
     .venv/bin/python benchmarks/bench_restir_pt.py --phase di        # ReSTIR DI's settings inside ReSTIR PT
+    .venv/bin/python benchmarks/bench_restir_pt.py --phase fused     # fused against split stages, 512x512
 
 stages: ReSTIR PT with its defaults (hybrid shift, ReSTIR DI for direct light, temporal reuse, one
 spatial round of 3 neighbours) for `--frames` frames after one warm-up frame, and the path tracer
@@ -19,6 +20,13 @@ average of frames 16..31; the path tracer's frames are independent, ReSTIR PT's 
 path tracer gets ReSTIR PT's measured frame time: its frame time is fitted as a + b spp from
 runs at 2 and 8 spp, and spp = round((ms_restir_pt - a) / b); both measured times are printed.
 `--settings` (JSON) renders ReSTIR PT with other settings than the defaults.
+
+fused: the shipped pipeline (trace + initial RIS and temporal reuse in one kernel, two reservoir
+buffers; the same for the ReSTIR DI component's initial, visibility and temporal stages) against
+`stages.split` and `di.stages.split` (each stage its own kernel, three buffers each) and the path tracer at 1 spp, at
+512x512 on the shared Cornell box and veach-bidir, each `--frames` frames after a warm-up, in
+`--repeats` alternating rounds (A B C A B C); frame-time ratios per round, bytes per pixel.
+`--direct pt` runs both ReSTIR PT sides with direct=pt.
 
 di: the quality phase for a grid of ReSTIR DI settings (light candidates x spatial rounds) of the
 ReSTIR DI component that gives ReSTIR PT its direct light (how its defaults were chosen).
@@ -75,6 +83,39 @@ def phase_stages(args, out):
         print(f"  shifts {json.dumps(a.stats['shifts'])}; final samples {a.stats['final_samples']}")
         out[name] = {"stages_ms": stages, "frame_ms": pt_ms, "ratio": ratio, "bytes_per_pixel": bpp,
                      "shifts": a.stats["shifts"], "final_samples": a.stats["final_samples"]}
+
+
+def phase_fused(args, out):
+    settings = {"direct": args.direct}
+    for name in ("cornell-box", "veach-bidir"):
+        scene = restir.load_scene(shared(name))
+        common = dict(max_depth=args.max_depth, width=512, height=512)
+        split = {**settings, "stages.split": True, **({"di.stages.split": True} if args.direct == "restir-di" else {})}
+        sides = {"fused": ("restir-pt", settings), "split": ("restir-pt", split),
+                 "pt": ("pt", {})}
+        for method, st in sides.values():
+            render(scene, method, 1, settings=st, **common)  # compile, warm up
+        ms = {k: [] for k in sides}
+        last = {}
+        for rep in range(args.repeats):
+            for k, (method, st) in sides.items():
+                last[k] = render(scene, method, args.frames, seed=rep, settings=st, **common)
+                ms[k].append(last[k].stats["ms_per_frame"])
+        ratios = {"fused/pt": [a / b for a, b in zip(ms["fused"], ms["pt"])],
+                  "split/pt": [a / b for a, b in zip(ms["split"], ms["pt"])],
+                  "fused/split": [a / b for a, b in zip(ms["fused"], ms["split"])]}
+        stages = {k: {n: v["total_ms"] / args.frames for n, v in last[k].stats["stages"].items() if v["total_ms"]}
+                  for k in ("fused", "split")}
+        bpp = {k: last[k].stats["bytes_per_pixel"] for k in ("fused", "split")}
+        print(f"\n{name} 512x512 max_depth {args.max_depth}, direct={args.direct}: ms per frame "
+              + "; ".join(f"{k} " + ", ".join(f"{x:.0f}" for x in v) for k, v in ms.items()))
+        for k, v in ratios.items():
+            print(f"  {k}: " + ", ".join(f"{x:.3f}" for x in v))
+        for k in ("fused", "split"):
+            print(f"  {k} stages: " + "  ".join(f"{n} {v:.0f}" for n, v in stages[k].items()))
+            print(f"  {k} bytes per pixel {bpp[k]['total']:.0f}")
+        out[f"fused-{name}-{args.direct}"] = {"frame_ms": ms, "ratios": ratios, "stages_ms": stages,
+                                             "bytes_per_pixel": bpp}
 
 
 QUALITY_SCENES = {"indirect-room": lambda: "builtin:indirect-room", "veach-bidir": lambda: shared("veach-bidir"),
@@ -161,13 +202,15 @@ def phase_cap(args, out):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "quality", "cap", "di", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "quality", "cap", "di", "fused", "all"], default="all")
     ap.add_argument("--frames", type=int, default=4)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--settings", default="{}", help="ReSTIR PT settings (JSON) for the quality phase")
     ap.add_argument("--scenes", nargs="+", default=["indirect-room", "veach-bidir", "cornell-box-glossy"])
+    ap.add_argument("--repeats", type=int, default=3, help="alternating rounds of the fused phase")
+    ap.add_argument("--direct", default="restir-di", help="ReSTIR PT's direct setting in the fused phase")
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}
@@ -179,6 +222,8 @@ def main():
         phase_cap(args, out)
     if args.phase in ("di", "all"):
         phase_di(args, out)
+    if args.phase in ("fused", "all"):
+        phase_fused(args, out)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(out, f, indent=2)

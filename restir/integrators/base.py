@@ -181,12 +181,20 @@ class Integrator:
         """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a
         scratch buffer `self.pass_out`): reads this sample's reservoirs, writes `pass_out`, then
         the two swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass
-        wrote. in_place: the race mutant, which writes the buffer it reads."""
+        wrote. A method whose history is read before its first pass (its first kernel resamples
+        the new reservoirs with the history, fused) has no scratch buffer (`pass_out` None): the
+        pass writes into the history's buffer, and the buffer it read becomes the history's.
+        in_place: the race mutant, which writes the buffer it reads."""
+        history_free = self.pass_out is None
+        if history_free:
+            self.pass_out = self.reservoirs.previous
         current = self.reservoirs.current
         out = current if in_place else self.pass_out
         self.run_stage(stage, kernel, [*inputs, current], [out, *extra_outputs])
         if not in_place:
             self.reservoirs.current, self.pass_out = self.pass_out, current
+        if history_free:
+            self.reservoirs.previous, self.pass_out = self.pass_out, None
 
     def stats(self) -> dict:
         """What the method reports about the frames rendered so far (the API adds wall times)."""

@@ -335,3 +335,38 @@ def test_drift_test_catches_a_feedback_loop():
     spatial reuse (TESTING.md 3.3: runaway needs a gain above about 1.5); L2 must flag it."""
     with pytest.raises(AssertionError), np.errstate(all="ignore"):  # the mutant overflows to inf
         check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50, mutation="temporal_overweight"))
+
+
+@pytest.mark.parametrize("settings,motion", [({}, "none"), ({"visibility": "shading", "candidates.bsdf": 0, "spatial.rounds": 0}, "none"),
+                                             ({"candidates.bsdf": 2}, "orbit")])
+def test_fused_initial_and_temporal_is_the_split_pipeline_bit_for_bit(settings, motion):
+    """The shipped pipeline runs initial RIS, visibility and temporal reuse as one kernel, and the
+    spatial rounds write into the history's buffer; stages.split runs the three stages apart with
+    a third reservoir buffer. The same functions in the same order: images and event counts must
+    be identical bit for bit over frames (temporal reuse from the second sample on), with one
+    reservoir buffer fewer. Also through ReSTIR PT's component (di.stages.split)."""
+    scene = restir.load_scene("builtin:cornell-box-glossy", width=24, height=20)
+
+    def run(method, key, split, extra):
+        cfg = restir.RenderConfig(method=method, spp=2, frames=3, seed=4, settings={**extra, key: split},
+                                  max_depth=None if method == "restir-di" else 4, camera_motion=motion)
+        return restir.render(scene, cfg)
+
+    for method, key, extra in (("restir-di", "stages.split", settings), ("restir-pt", "di.stages.split", {})):
+        fused, split = run(method, key, False, extra), run(method, key, True, extra)
+        assert np.array_equal(fused.image, split.image), method
+        assert fused.stats["counters"] == split.stats["counters"]
+        assert sum(fused.stats["rays_by_stage"].values()) == sum(split.stats["rays_by_stage"].values())
+        prefix = "" if method == "restir-di" else "di."
+        bpp_f, bpp_s = fused.stats["bytes_per_pixel"], split.stats["bytes_per_pixel"]
+        assert f"{prefix}reservoirs_pass" not in bpp_f and bpp_s[f"{prefix}reservoirs_pass"] == 24
+        assert bpp_s["total"] - bpp_f["total"] == 24
+        if method == "restir-pt":
+            break
+
+
+def test_split_stages_refuse_fault_injections():
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    cfg = restir.RenderConfig(method="restir-di", settings={"stages.split": True, "debug.mutation": "temporal_overweight"})
+    with pytest.raises(restir.ConfigError, match="stages.split"):
+        restir.render(scene, cfg)

@@ -13,6 +13,8 @@ configuration (restir/validation/stats.py); a pass also needs the minimum detect
 """
 import functools
 
+import numpy as np
+
 import pytest
 
 import restir
@@ -174,3 +176,35 @@ def test_mcmc_without_the_weight_update_is_caught(scene):
 def test_harness_refuses_mutations():
     with pytest.raises(AssertionError, match="fault injection"):
         runs(sphere(), {"debug.mutation": "bsdf_twice"}, 2, 1, 4)
+
+
+@pytest.mark.parametrize("settings", [{}, {"mcmc.steps": 1, "spatial.rounds": 2, "direct": "pt"}])
+def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
+    """The shipped pipeline runs trace + initial RIS and temporal reuse as one kernel, and every
+    pass after it writes into the history's buffer; stages.split runs the two stages apart with a
+    third reservoir buffer. The same functions in the same order: the images, the shift and event
+    counts must be identical bit for bit over frames (temporal reuse from the second sample on),
+    and the fused pipeline must hold one path-reservoir buffer fewer."""
+    scene = restir.load_scene("builtin:cornell-box-glossy", width=24, height=20)
+    out = {}
+    for split in (False, True):
+        cfg = restir.RenderConfig(method="restir-pt", spp=2, frames=3, seed=5, max_depth=5,
+                                  settings={**settings, "stages.split": split})
+        out[split] = restir.render(scene, cfg)
+    fused, split = out[False], out[True]
+    assert np.array_equal(fused.image, split.image)
+    assert fused.stats["shifts"] == split.stats["shifts"] and fused.stats["shifts"]["temporal"]["reconnection"]["tried"]
+    assert fused.stats["counters"] == split.stats["counters"]
+    assert fused.stats["final_samples"] == split.stats["final_samples"]
+    assert sum(fused.stats["rays_by_stage"].values()) == sum(split.stats["rays_by_stage"].values())
+    bpp_f, bpp_s = fused.stats["bytes_per_pixel"], split.stats["bytes_per_pixel"]
+    assert "reservoirs_pass" not in bpp_f and bpp_s["reservoirs_pass"] == 76
+    assert bpp_s["total"] - bpp_f["total"] == 76
+    assert fused.stats["stages"]["trace_temporal"]["calls"] == 6 and split.stats["stages"]["temporal"]["calls"] == 5
+
+
+def test_split_stages_refuse_fault_injections():
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    cfg = restir.RenderConfig(method="restir-pt", settings={"stages.split": True, "debug.mutation": "m_per_event"})
+    with pytest.raises(restir.ConfigError, match="stages.split"):
+        restir.render(scene, cfg)

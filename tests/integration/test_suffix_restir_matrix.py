@@ -8,12 +8,13 @@ and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, s
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
 reconnection and replay shifts; direct=pt; the pairwise gather; prefixes ending exactly at x3
 (non-adaptive); a canonical suffix for every prefix; the fixed search radius; pixel-centre
-primary rays; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and mask
+primary rays; the prototype's MMIS baseline with 1 and 8 suffixes per prefix; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and mask
 scenes, the cells of BUMP_CELLS. Welch z per channel at image,
 tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 
+from restir.integrators.suffix_restir.pipeline import MMIS_BASELINE
 from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
@@ -34,6 +35,9 @@ MATRIX = {
     "C5-prefix-exactly-x3": ({"prefix.adaptive": False, "prefix.min_length": 2}, "none"),
     "C5-canonical-each": ({"gather.canonical_per_prefix": True}, "none"),
     "C5-radius-fixed": ({"gather.radius_type": "fixed"}, "none"),
+    # the official prototype's MMIS baseline (MMIS_BASELINE): fresh suffixes gathered by MIS, no reuse
+    "C5-mmis-M1": (MMIS_BASELINE, "none"),
+    "C5-mmis-M8": ({**MMIS_BASELINE, "gather.suffixes": 8}, "none"),
 }
 
 

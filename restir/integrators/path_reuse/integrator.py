@@ -52,7 +52,6 @@ class PathReuseIntegrator(Integrator):
     the attribute holding its SpatialReuseSettings) and its MUTATIONS."""
 
     SPATIAL = "spatial"
-    PASS_BUFFER = True  # a third path-reservoir buffer for the reuse passes' output (ping-pong)
 
     @classmethod
     def check_path_settings(cls, settings) -> None:
@@ -92,8 +91,7 @@ class PathReuseIntegrator(Integrator):
         self.emission = self.buffer("emission", wp.vec3)
         self.reservoirs = PingPong(self.buffer(f"{self.RESERVOIRS}", PathReservoir),
                                    self.buffer(f"{self.RESERVOIRS}_prev", PathReservoir))
-        if self.PASS_BUFFER:
-            self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir)
+        self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir) if self.wants_pass_buffer() else None
         self.sample_L = self.buffer("sample_L", wp.vec3)
         # per-pass scratch for the stats, like `events`: shift counts in reuse passes
         self.shift_events = self.buffer("shift_events", wp.vec4i)
@@ -104,6 +102,12 @@ class PathReuseIntegrator(Integrator):
         # the first vertex whose events the method resamples; paths need max_depth >= first + 2
         self.first_event = 1 if s.direct == "restir-di" else 0
         self.resamples = s.max_depth >= self.first_event + 2
+
+    def wants_pass_buffer(self) -> bool:
+        """Whether a reuse pass runs while the history is still to be read, so that its output
+        needs a third path-reservoir buffer. Without one, every pass writes into the history's
+        buffer (Integrator.reuse_pass): a method's passes then run only after its history was read."""
+        return False
 
     def pt_params(self, frame: int, sample: int, near_distance: float, temporal_cap: float) -> PathReuseParams:
         """The frame's ReSTIR PT parameters (the path samples' shift, rc criteria and reuse)."""

@@ -18,17 +18,18 @@ from .params import DIParams
 from .reservoir import DIReservoir
 from .s1_initial import initial_kernel
 from .s2_visibility import visibility_kernel
-from .s3_temporal import make_temporal_kernel, temporal_kernel
+from .s3_temporal import initial_temporal_kernel, make_initial_temporal_kernel, temporal_kernel
 from .s4_spatial import make_spatial_kernel, spatial_kernel
 from .s5_shade import shade_kernel
 
-# Fault injections for the mutation tests (common/mutations.py), each a build of the (temporal,
-# spatial) kernels or, for the race and the check, of the pipeline.
-MUTATIONS = Mutations((temporal_kernel, spatial_kernel), {
-    "drop_empty_neighbors": lambda: (temporal_kernel, make_spatial_kernel(drop_empty_neighbors=True)),  # A3
-    "skip_zero_canonical": lambda: (make_temporal_kernel(skip_zero_canonical=True),                     # A1
+# Fault injections for the mutation tests (common/mutations.py), each a build of the (initial +
+# visibility + temporal, spatial) kernels or, for the race and the check, of the pipeline. They are
+# built for the fused pipeline, the one that ships; stages.split refuses them (check_settings).
+MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
+    "drop_empty_neighbors": lambda: (initial_temporal_kernel, make_spatial_kernel(drop_empty_neighbors=True)),  # A3
+    "skip_zero_canonical": lambda: (make_initial_temporal_kernel(skip_zero_canonical=True),                    # A1
                                     make_spatial_kernel(skip_zero_canonical=True)),
-    "temporal_overweight": lambda: (make_temporal_kernel(overweight_history=True), spatial_kernel),   # feedback
+    "temporal_overweight": lambda: (make_initial_temporal_kernel(overweight_history=True), spatial_kernel),  # feedback
     "spatial_in_place": None,        # the spatial pass writes its own input (race, R2)
     "bsdf_unshadowed_reuse": None,   # lets check_settings accept a biased combination
 })
@@ -50,13 +51,16 @@ class DISettings(Settings):
     temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one "
                                   "(<= 0: no cap, i.e. 1e6 x)")
     spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=15.0, rounds=2)
+    stages_split: bool = setting("stages.split", False, "initial RIS, visibility and temporal reuse as three "
+                                 "kernels, each timed (they run fused otherwise; the same images bit for bit), "
+                                 "with a third reservoir buffer (+24 B per pixel)", static=True)
     debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
 
 
 class ReSTIRDI(Integrator):
     name = "restir-di"
-    STAGES = ("gbuffer", "initial", "visibility", "temporal", "spatial", "shade")
-    KERNELS = (primary_hits_kernel, initial_kernel, visibility_kernel, temporal_kernel, spatial_kernel, shade_kernel)
+    STAGES = ("gbuffer", "initial_temporal", "initial", "visibility", "temporal", "spatial", "shade")
+    KERNELS = (primary_hits_kernel, initial_temporal_kernel, spatial_kernel, shade_kernel)
     Settings = DISettings
     DESCRIPTION = "ReSTIR DI (direct light, max_depth 2): initial RIS, visibility, temporal and spatial reuse"
     VISIBILITY = ("reuse", "shading")
@@ -88,9 +92,12 @@ class ReSTIRDI(Integrator):
         settings.spatial.check(DI_MAX_NEIGHBORS)
         if settings.debug_mutation not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
+        if settings.stages_split and settings.debug_mutation not in ("none", "bsdf_unshadowed_reuse"):
+            raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
     def kernels(self) -> tuple:
-        return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
+        split = (initial_kernel, visibility_kernel, temporal_kernel) if self.settings.stages_split else ()
+        return (*self.KERNELS, *split, *MUTATIONS.kernels(self.settings.debug_mutation))
 
     def allocate(self) -> None:
         self.spatial_radius = self.settings.spatial.resolve_radius(self.height)
@@ -103,7 +110,10 @@ class ReSTIRDI(Integrator):
             self.gbuffers, self.primary_weight, self.emission = self.primary
         # this sample's reservoirs as the passes refine them, and the previous sample's final ones
         self.reservoirs = PingPong(self.buffer("reservoirs", DIReservoir), self.buffer("reservoirs_prev", DIReservoir))
-        self.pass_out = self.buffer("reservoirs_pass", DIReservoir)  # each reuse pass's output (ping-pong)
+        # each reuse pass's output (ping-pong): only the split stages need a third buffer, since their
+        # visibility and temporal passes run while the history is still to be read; fused, the
+        # passes write into the history's buffer (Integrator.reuse_pass)
+        self.pass_out = self.buffer("reservoirs_pass", DIReservoir) if self.settings.stages_split else None
         self.prev_camera = None
         self.sample_L = self.buffer("sample_L", wp.vec3)
 
@@ -132,15 +142,22 @@ class ReSTIRDI(Integrator):
     def resample_and_shade(self, frame: int, sample: int) -> None:
         """Every stage after the primary hits, for one sample: direct light into `sample_L`."""
         sc = self.dscene.scene
-        temporal, spatial = MUTATIONS.kernels(self.settings.debug_mutation)
+        initial_temporal, spatial = MUTATIONS.kernels(self.settings.debug_mutation)
         in_place = self.settings.debug_mutation == "spatial_in_place"
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
-        self.run_stage("initial", initial_kernel, [sc, p, gb.current], [res.current])
-        if p.visibility:
-            self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
-        if self.settings.temporal and self.prev_camera is not None:
-            self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        temporal = bool(self.settings.temporal and self.prev_camera is not None)
+        if self.settings.stages_split:
+            self.run_stage("initial", initial_kernel, [sc, p, gb.current], [res.current])
+            if p.visibility:
+                self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
+            if temporal:
+                self.reuse_pass("temporal", temporal_kernel,
+                                [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        else:
+            self.run_stage("initial_temporal", initial_temporal, [sc, p, int(temporal),
+                                                                  self.prev_camera or self.dscene.camera, gb.current,
+                                                                  gb.previous, res.previous], [res.current])
         for rd in range(self.settings.spatial.rounds):
             p.spatial_round = rd
             self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current], in_place=in_place)

@@ -11,6 +11,8 @@ is weighted by the balance heuristic over both generators:
 with p_hat = luminance(f_s Le G) (unshadowed: visibility is the next stage's job). A BSDF
 sample that picks a delta lobe, misses every emitter or fails is a candidate of weight 0.
 Delta-only surfaces and misses keep an empty reservoir.
+By default this stage, the visibility stage and temporal reuse run as one kernel (s3_temporal.py);
+`stages.split` launches each as a kernel of its own, timed apart.
 Reads: scene, G-buffer (gb). Writes: reservoirs, events (non-finite and zero weights, rays).
 """
 import warp as wp
@@ -29,6 +31,7 @@ from ...resampling.ris import ris_finalize, ris_init, ris_stream
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import Shading, load_shading_outlined
+from .kernel_module import SPLIT_MODULE
 from .params import DIParams
 from .reservoir import (DIReservoir, candidate_densities, empty_reservoir, on_triangle, store,
                         unshadowed_contribution)
@@ -72,14 +75,13 @@ def light_point_along(scene: SceneDevice, sh: Shading, d: wp.vec3) -> DIReservoi
     return cand
 
 
-@wp.kernel
-def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
-                   reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
-    pixel = wp.tid() + offset
+@wp.func
+def initial_reservoir(scene: SceneDevice, params: DIParams, sh: Shading, pixel: int):
+    """The stage's work for one pixel, (reservoir, events): what the split kernel stores and the
+    fused kernel (s3_temporal.py) keeps in registers."""
     out = empty_reservoir()
     s = ris_init()
     rays = int(0)
-    sh = load_shading_outlined(scene, gb, pixel)
     if sh.valid != 0 and bsdf_is_delta_only(sh.mat) == 0:
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_INITIAL), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DIMS_PER_SAMPLE)
@@ -111,5 +113,14 @@ def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffe
         f = ris_finalize(s, 1.0)
         f.M = 1.0  # the pixel's initial RIS is one technique of confidence 1, whatever its candidate count
         out = store(out, f)
-    reservoirs[pixel] = out
-    events[pixel] = stage_events(s, 0, rays)
+    return out, stage_events(s, 0, rays)
+
+
+@wp.kernel(module=SPLIT_MODULE)
+def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
+                   reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
+    """The stage on its own (`stages.split`)."""
+    pixel = wp.tid() + offset
+    r, ev = initial_reservoir(scene, params, load_shading_outlined(scene, gb, pixel), pixel)
+    reservoirs[pixel] = r
+    events[pixel] = ev

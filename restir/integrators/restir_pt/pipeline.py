@@ -19,8 +19,8 @@ from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
 from ..path_reuse.shift import make_shift
-from .s1_initial import initial_kernel, make_initial_kernel
-from .s2_temporal import make_temporal_kernel, temporal_kernel
+from .s1_initial import initial_kernel
+from .s2_temporal import make_trace_temporal_kernel, temporal_kernel, trace_temporal_kernel
 from .s3_mcmc import MUTATIONS as MCMC_MUTATIONS
 from .s3_mcmc import make_mcmc_kernel, mcmc_kernel
 from .s4_spatial import make_spatial_kernel, spatial_kernel
@@ -29,24 +29,24 @@ from .s5_shade import shade_kernel
 
 def _shift_mutant(mutation: str) -> tuple:
     shift, module = make_shift(mutation), f"restir_pt_{mutation}"
-    return (initial_kernel, make_temporal_kernel(shift, module=module), mcmc_kernel,
-            make_spatial_kernel(shift, module=module))
+    return make_trace_temporal_kernel(shift, module=module), mcmc_kernel, make_spatial_kernel(shift, module=module)
 
 
 def _mcmc_mutant(mutation: str) -> tuple:
-    return initial_kernel, temporal_kernel, make_mcmc_kernel(mutation, f"restir_pt_mcmc_{mutation}"), spatial_kernel
+    return trace_temporal_kernel, make_mcmc_kernel(mutation, f"restir_pt_mcmc_{mutation}"), spatial_kernel
 
 
-# Fault injections for the mutation tests (common/mutations.py), each a build of the (initial,
-# temporal, mcmc, spatial) kernels or, for the race, of the pipeline.
-MUTATIONS = Mutations((initial_kernel, temporal_kernel, mcmc_kernel, spatial_kernel), {
+# Fault injections for the mutation tests (common/mutations.py), each a build of the shipped
+# (trace + temporal, mcmc, spatial) kernels or, for the race, of the pipeline. They are built for
+# the fused pipeline, the one that ships; stages.split refuses them (check_settings).
+MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel), {
     **{m: functools.partial(_shift_mutant, m) for m in SHIFT_MUTATIONS},
     **{f"mcmc_{m}": functools.partial(_mcmc_mutant, m) for m in MCMC_MUTATIONS},
-    "m_per_event": lambda: (make_initial_kernel(m_per_event=True), temporal_kernel, mcmc_kernel, spatial_kernel),
-    "drop_failed_shifts": lambda: (initial_kernel,
-                                   make_temporal_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
-                                   mcmc_kernel,
-                                   make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
+    "m_per_event": lambda: (make_trace_temporal_kernel(m_per_event=True, module="restir_pt_m_per_event"),
+                            mcmc_kernel, spatial_kernel),
+    "drop_failed_shifts": lambda: (
+        make_trace_temporal_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"), mcmc_kernel,
+        make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
 })
 
@@ -67,15 +67,18 @@ class PTSettings(PathReuseSettings):
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
                                   "are rough")
+    stages_split: bool = setting("stages.split", False, "trace + initial RIS and temporal reuse as two kernels, "
+                                 "each timed (they run fused otherwise; the same images bit for bit), with a "
+                                 "third path-reservoir buffer (+76 B per pixel)", static=True)
     debug_mutation: str = setting("debug.mutation", "none", MUTATION_DOC, static=True)  # builds mutant kernels
     di: DISettings = di_component()
 
 
 class ReSTIRPT(PathReuseIntegrator):
     name = "restir-pt"
-    STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "trace_initial",
-              "temporal", "mcmc", "spatial", "shade")
-    KERNELS = (primary_hits_kernel, initial_kernel, temporal_kernel, mcmc_kernel, spatial_kernel, shade_kernel)
+    STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
+              "trace_temporal", "trace_initial", "temporal", "mcmc", "spatial", "shade")
+    KERNELS = (primary_hits_kernel, trace_temporal_kernel, mcmc_kernel, spatial_kernel, shade_kernel)
     Settings = PTSettings
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
     MUTATIONS = MUTATIONS
@@ -91,9 +94,18 @@ class ReSTIRPT(PathReuseIntegrator):
             raise ConfigError(f"mcmc.steps must be in [0, {PT_MAX_MCMC_STEPS}]")
         if settings.mcmc_start not in ("z", "rc_prev"):
             raise ConfigError("mcmc.start must be z or rc_prev")
+        if settings.stages_split and MUTATIONS.builds[settings.debug_mutation] is not None:
+            raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
     def kernels(self) -> tuple:
-        return (*self.KERNELS, *MUTATIONS.kernels(self.settings.debug_mutation))
+        split = (initial_kernel, temporal_kernel) if self.settings.stages_split else ()
+        return (*self.KERNELS, *split, *MUTATIONS.kernels(self.settings.debug_mutation))
+
+    def wants_pass_buffer(self) -> bool:
+        """Only the split temporal kernel needs a third path-reservoir buffer: it reads the history
+        and the new reservoirs and writes neither. Fused, every pass after it writes into the
+        history's buffer (path_reuse/integrator.py)."""
+        return bool(self.settings.stages_split)
 
     def allocate(self) -> None:
         self.allocate_path_reuse()
@@ -107,12 +119,21 @@ class ReSTIRPT(PathReuseIntegrator):
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
         mutation = self.settings.debug_mutation
-        initial, temporal, mcmc, spatial = MUTATIONS.kernels(mutation)
+        trace_temporal, mcmc, spatial = MUTATIONS.kernels(mutation)
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
-        self.run_stage("trace_initial", initial, [sc, p, gb.current], [res.current])
-        if self.settings.temporal and self.prev_camera is not None:
-            self.reuse_pass("temporal", temporal, [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        temporal = bool(self.settings.temporal and self.prev_camera is not None)
+        if self.settings.stages_split:
+            self.run_stage("trace_initial", initial_kernel, [sc, p, gb.current], [res.current])
+            if temporal:
+                self.reuse_pass("temporal", temporal_kernel,
+                                [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+        else:
+            self.run_stage("trace_temporal", trace_temporal, [sc, p, int(temporal), self.prev_camera or self.dscene.camera,
+                                                              gb.current, gb.previous, res.previous],
+                           [res.current, self.shift_events])
+            if temporal:
+                self.count_shifts("temporal")
         if self.settings.mcmc_steps > 0:
             self.reuse_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
                                            int(self.settings.mcmc_start == "rc_prev"), gb.current], counts=("mcmc",))

@@ -2,6 +2,9 @@
 event of every path streamed into one reservoir (base_path.py; ALGORITHMS.md 2.2):
 w = p_hat(F) / C per event, W = w_sum / p_hat(selected), M = C (one per traced path, never one
 per event). Pixels without a primary hit keep an empty reservoir of M = 0.
+
+By default this stage runs fused with temporal reuse (s2_temporal.py: one kernel, the new
+reservoir never stored); `stages.split` launches it as a kernel of its own, timed apart.
 Reads: scene, G-buffer. Writes: reservoirs, events (non-finite and zero weights, rays).
 """
 import warp as wp
@@ -12,26 +15,30 @@ from ...device.streams import STAGE_PT_PATHS, STAGE_PT_RIS
 from ...resampling.ris import ris_finalize, ris_init
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
-from ..common.shading import load_shading
+from ..common.shading import Shading, load_shading
 from ..path_reuse.base_path import EVENTS_PER_PATH, BasePath, trace_base_path
 from ..path_reuse.params import PathReuseParams
-from ..path_reuse.path_sample import PathReservoir, empty_path, store
-from .kernel_module import KERNEL_MODULE
+from ..path_reuse.path_sample import empty_path, store
+from ..path_reuse.path_sample import PathReservoir
+from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
+
+_built: dict = {}
 
 
-def make_initial_kernel(m_per_event: bool = False):
-    """The initial kernel; m_per_event builds the mutation that counts M per streamed event (and
-    divides W by it), the defect TESTING.md 5.11 lists; the shipped kernel is built without it."""
+def make_initial_reservoir(m_per_event: bool = False):
+    """The stage's work for one pixel as a function, (reservoir, events) from its shading point:
+    what the split kernel stores and the fused kernel keeps in registers. m_per_event builds the
+    mutation that counts M per streamed event (and divides W by it), the defect TESTING.md 5.11
+    lists; the shipped function is built without it."""
+    if m_per_event in _built:
+        return _built[m_per_event]
 
-    @wp.kernel(module="unique" if m_per_event else KERNEL_MODULE)
-    def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
-                       reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
-        pixel = wp.tid() + offset
+    @wp.func(module="restir_pt_m_per_event" if m_per_event else KERNEL_MODULE)
+    def initial_reservoir(scene: SceneDevice, params: PathReuseParams, sh: Shading, pixel: int):
         acc = BasePath()
         acc.s = ris_init()
         acc.r = empty_path()
         out = empty_path()
-        sh = load_shading(scene, gb, pixel)
         if sh.valid != 0:
             path_key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_PATHS), wp.uint32(pixel))
             ris_key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_RIS), wp.uint32(pixel))
@@ -46,10 +53,20 @@ def make_initial_kernel(m_per_event: bool = False):
                 f = ris_finalize(acc.s, wp.max(1.0, n) / float(params.candidates))
                 f.M = wp.max(1.0, n)
             out = store(acc.r, f)
-        reservoirs[pixel] = out
-        events[pixel] = stage_events(acc.s, 0, acc.rays)
+        return out, stage_events(acc.s, 0, acc.rays)
 
-    return initial_kernel
+    _built[m_per_event] = initial_reservoir
+    return initial_reservoir
 
 
-initial_kernel = make_initial_kernel()
+initial_reservoir = make_initial_reservoir()
+
+
+@wp.kernel(module=SPLIT_MODULE)
+def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
+                   reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
+    """The stage on its own (`stages.split`)."""
+    pixel = wp.tid() + offset
+    r, ev = initial_reservoir(scene, params, load_shading(scene, gb, pixel), pixel)
+    reservoirs[pixel] = r
+    events[pixel] = ev

@@ -7,8 +7,17 @@ The previous domain is the previous primary hit seen by the previous camera, eva
 current scene (static scenes). The replay is done inline in this pass (no separate retrace
 pass): the same function runs for both directions with the same seeds, so the two passes of
 the official code cannot disagree here by construction.
-Reads: scene, G-buffer, previous G-buffer and camera, previous final reservoirs, reservoirs.
-Writes: reservoirs_out, events.
+
+Two kernels run it. The shipped one, `trace_temporal_kernel`, is stage 1 and this stage fused:
+the pixel's new reservoir (s1_initial.initial_reservoir) stays in registers, so no buffer holds
+it between the stages and the reuse passes after this one can write into the history's buffer,
+which nothing reads once this kernel has run (76 B per pixel fewer; ping-pong all the same: the
+kernel reads the history, written a frame earlier, and writes the current buffer, which it never
+reads). With temporal = 0 (the first frame, or temporal reuse off) it is stage 1 alone.
+`stages.split` runs the stages as two kernels instead, each timed, with the third buffer:
+the same functions in the same order, so the images are bit for bit the same.
+Reads: scene, G-buffer, previous G-buffer and camera, previous final reservoirs (and, split, the
+reservoirs). Writes: reservoirs (split: reservoirs_out), shift counts, events.
 """
 import warp as wp
 
@@ -20,53 +29,99 @@ from ...resampling.ris import cap_history, ris_finalize
 from ..common.events import stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
-from ..common.shading import load_shading
+from ..common.shading import Shading, load_shading
 from ..path_reuse.domain import domain_at
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.path_sample import PathReservoir, store
 from ..path_reuse.reuse_pair import make_reuse_pair
 from ..path_reuse.shift import shift_path
-from .kernel_module import KERNEL_MODULE
+from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
+from .s1_initial import make_initial_reservoir
 
 
-def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
-    """The temporal kernel over a shift function; drop_failed builds the mutation that drops a
+def make_temporal_reuse(shift=shift_path, drop_failed: bool = False, module=None):
+    """The stage's work for one pixel as a function: (reservoir, shift counts, events) from the
+    pixel's new reservoir c and shading point sc. drop_failed builds the mutation that drops a
     history whose shift failed (its M and its density in the current sample's weight)."""
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
-    @wp.kernel(module=module or KERNEL_MODULE)
+    @wp.func(module=module or KERNEL_MODULE)
+    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, prev_gb: GBuffer,
+                       prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir, sc: Shading, pixel: int):
+        out = c
+        shifts = wp.vec4i(0)
+        events = wp.vec4i(0)
+        if sc.valid != 0:
+            nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+            if nq.pixel != NO_PIXEL:
+                q = nq.pixel
+                dc = domain_at(sc, params)
+                dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
+                r = prev_reservoirs[q]
+                Mq = cap_history(r.M, params.temporal_cap, c.M)
+                key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
+                base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
+                dropped = int(0)
+                if wp.static(drop_failed):
+                    if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
+                        dropped = 1
+                if dropped == 0:
+                    # ---- the history's sample shifted here, and the current sample there (its density there)
+                    st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base),
+                                       rng_uniform(key, base + wp.uint32(1)))
+                    shifts = st.tl.counts
+                    out = store(st.chosen, ris_finalize(st.s, 1.0))
+                    events = stage_events(st.s, st.tl.failed, st.tl.rays)
+        return out, shifts, events
+
+    return temporal_reuse
+
+
+def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
+    """The split temporal kernel (`stages.split`) over a shift function."""
+    temporal_reuse = make_temporal_reuse(shift, drop_failed, module)
+
+    @wp.kernel(module=module or SPLIT_MODULE)
     def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                         shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
         pixel = wp.tid() + offset
-        c = reservoirs[pixel]
-        reservoirs_out[pixel] = c
-        events[pixel] = wp.vec4i(0)
-        shifts[pixel] = wp.vec4i(0)
-        sc = load_shading(scene, gb, pixel)
-        if sc.valid == 0:
-            return
-        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
-        if nq.pixel == NO_PIXEL:
-            return
-        q = nq.pixel
-        dc = domain_at(sc, params)
-        dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
-        r = prev_reservoirs[q]
-        Mq = cap_history(r.M, params.temporal_cap, c.M)
-        key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
-        base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        if wp.static(drop_failed):
-            if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
-                return
-        # ---- the history's sample shifted here, and the current sample there (its density there)
-        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
-        shifts[pixel] = st.tl.counts
-        reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
-        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
+        r, n, ev = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
+                                  load_shading(scene, gb, pixel), pixel)
+        reservoirs_out[pixel] = r
+        shifts[pixel] = n
+        events[pixel] = ev
 
     return temporal_kernel
 
 
+def make_trace_temporal_kernel(shift=shift_path, drop_failed: bool = False, m_per_event: bool = False,
+                               module=None):
+    """The shipped kernel, stages 1 and 2 fused, over a shift function; the mutations as in
+    make_temporal_reuse and s1_initial.make_initial_reservoir."""
+    temporal_reuse = make_temporal_reuse(shift, drop_failed, module)
+    initial = make_initial_reservoir(m_per_event)
+
+    @wp.kernel(module=module or KERNEL_MODULE)
+    def trace_temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, temporal: int,
+                              prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
+                              prev_reservoirs: wp.array(dtype=PathReservoir),
+                              reservoirs: wp.array(dtype=PathReservoir), shifts: wp.array(dtype=wp.vec4i),
+                              events: wp.array(dtype=wp.vec4i)):
+        pixel = wp.tid() + offset
+        sc = load_shading(scene, gb, pixel)
+        c, ev = initial(scene, params, sc, pixel)
+        n = wp.vec4i(0)
+        if temporal != 0:
+            c, n, ev_t = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
+            ev = ev + ev_t
+        reservoirs[pixel] = c
+        shifts[pixel] = n
+        events[pixel] = ev
+
+    return trace_temporal_kernel
+
+
 temporal_kernel = make_temporal_kernel()
+trace_temporal_kernel = make_trace_temporal_kernel()

@@ -99,10 +99,19 @@ class SuffixSettings(PathReuseSettings):
     di: DISettings = di_component()
 
 
+# The official prototype's "MMIS" baseline (its render-mode preset 1, PathTracer.cpp, with the
+# pass's useMMIS): the final gather alone, over fresh prefixes and fresh suffixes, combined by the
+# same MIS, with no prefix resampling, no suffix reuse (temporal or spatial), the reconnection
+# shift and no confidence cap (every M is 1). Not a method of its own: these settings of this one
+# (docs/suffix_restir.md, "The MMIS baseline").
+MMIS_BASELINE = {"shift": "reconnection", "prefix.temporal": False, "suffix.temporal": False,
+                 "suffix.spatial.rounds": 0}
+
+
 class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
-    STAGES = ("gbuffer", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade", "prefix", "search",
-              "suffix", "suffix_spatial", "gather")
+    STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
+              "prefix", "search", "suffix", "suffix_spatial", "gather")
     KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel,
                suffix_spatial_kernel, gather_kernel)
     Settings = SuffixSettings
@@ -114,7 +123,6 @@ class SuffixReSTIR(PathReuseIntegrator):
     RESERVOIRS = "suffixes"
     # No third suffix buffer: the suffix stage reads the history and writes the other buffer, so
     # the spatial rounds ping-pong between that one and the history's, which is free by then.
-    PASS_BUFFER = False
 
     @staticmethod
     def check_settings(settings: SuffixSettings) -> None:
@@ -278,11 +286,9 @@ class SuffixReSTIR(PathReuseIntegrator):
         self.count_shifts("suffix")
         for rd in range(self.settings.suffix_spatial.rounds):
             p.pt.spatial_round = rd
-            self.pass_out = res.previous
             self.reuse_pass("suffix_spatial", suffix_spatial_kernel,
                             [sc, p, self.width, self.height, self.prefixes.current, self.prefix_gbs.current],
                             self.settings.debug_mutation == "spatial_in_place")
-            res.previous = self.pass_out
         # ---- the final gather
         self.run_stage("gather", gather,
                        [sc, p, gb.current, self.search, self.prefixes.current, self.prefix_gbs.current, res.current,
