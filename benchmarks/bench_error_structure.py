@@ -9,7 +9,9 @@ DI's only depth. Each comparison also renders the path tracer at every other met
 time (the fair per-frame baseline; its spp fitted as a + b spp) and 8 independent runs per
 method for the radial correlation. Scenes are rendered at `--lines` lines at their own aspect.
 The reference is the path tracer at `--ref-spp` (cached); its own relMSE is printed, since every
-denoised error includes it.
+denoised error includes it. `--frames F` compares at equal samples instead (F frames of 1 spp per
+method, `--warmup` of them before the per-frame error is measured); `--runs 0` skips the
+radial correlation (F(8) and the temporal correlation come from the measured frames anyway).
 """
 import argparse
 import json
@@ -47,6 +49,9 @@ def load(spec):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=4.0, help="equal-time budget per method")
+    ap.add_argument("--frames", type=int, help="equal samples instead: this many frames per method (warm-up "
+                    "included), the same spp")
+    ap.add_argument("--warmup", type=int, default=4, help="frames before the per-frame error is measured")
     ap.add_argument("--lines", type=int, default=128, help="image height")
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--runs", type=int, default=8, help="independent runs for the radial correlation")
@@ -63,8 +68,10 @@ def main():
             continue
         h = args.lines
         w = int(round(h * aspect / 2)) * 2
-        r = compare(load(spec), args.methods or methods, equal_time=args.seconds, width=w, height=h, max_depth=depth,
-                    reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs, seed=args.seed)
+        budget = dict(frames=args.frames) if args.frames else dict(equal_time=args.seconds)
+        r = compare(load(spec), args.methods or methods, **budget, warmup=args.warmup, width=w, height=h,
+                    max_depth=depth, reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs,
+                    seed=args.seed)
         heads = {x["method"]: x for x in r.headline}
         if args.report:
             from restir.compare.report import write_report
@@ -75,7 +82,7 @@ def main():
             print("note:", note)
         for m in r.methods:
             x = m.metrics
-            radial = dict(zip(m.radial["radii"], m.radial["values"]))
+            radial = dict(zip(m.radial["radii"], m.radial["values"])) if m.radial else {r_: None for r_ in (1, 4, 8, 16)}
             hd = heads.get(m.label, {})
             row = {"scene": name, "size": f"{w}x{h}", "method": m.label, "ms_per_frame": x["ms_per_frame"],
                    "frames": m.frames, "relmse_frame": x["relmse_frame"],
