@@ -109,7 +109,10 @@ def test_bsdf_candidates_with_unshadowed_reuse_are_refused():
         render(shadow_scene(), "restir-di", 1, seed=1, **{"candidates.bsdf": 1, "visibility": "shading"})
 
 
-@pytest.mark.parametrize("mutation,visibility", [("none", "reuse"), ("bsdf_unshadowed_reuse", "shading")])
+# the forced biased combination's power check in the slow tier (47 s); the fast tier keeps the
+# default's half and the refusal (test_bsdf_candidates_with_unshadowed_reuse_are_refused)
+@pytest.mark.parametrize("mutation,visibility", [("none", "reuse"), pytest.param("bsdf_unshadowed_reuse", "shading",
+                                                                                 marks=pytest.mark.slow)])
 def test_bsdf_candidates_need_visibility_aware_reuse(mutation, visibility):
     """Why the combination above is refused, and a power check: BSDF candidates' density omits V,
     so on light points occluded from a pixel its weights sum to N_L p_L / (N_L p_L + N_B p_B) < 1;

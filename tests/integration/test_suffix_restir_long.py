@@ -22,6 +22,7 @@ def test_invariance_in_prefixes():
     check_flat([1, 2, 4, 8], lambda n: {"gather.prefixes": n}, METHOD)
 
 
+@pytest.mark.slow  # 71 s; the invariance in prefixes stays in the fast tier
 def test_invariance_in_suffixes():
     check_flat([1, 2, 4, 8], lambda m: {"gather.suffixes": m}, METHOD)
 

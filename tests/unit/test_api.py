@@ -104,4 +104,4 @@ def test_rays_are_counted_per_stage_with_the_direct_light_component():
     by_stage = r.stats["rays_by_stage"]
     assert sum(by_stage.values()) == r.stats["rays"]
     assert by_stage["gbuffer"] == 16 * 16  # one primary ray per pixel
-    assert by_stage["di.initial"] > 0 and by_stage["trace_initial"] > 0
+    assert by_stage["di.initial_temporal"] > 0 and by_stage["trace_temporal"] > 0

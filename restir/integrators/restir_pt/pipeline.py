@@ -129,8 +129,9 @@ class ReSTIRPT(PathReuseIntegrator):
                 self.reuse_pass("temporal", temporal_kernel,
                                 [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
         else:
-            self.run_stage("trace_temporal", trace_temporal, [sc, p, int(temporal), self.prev_camera or self.dscene.camera,
-                                                              gb.current, gb.previous, res.previous],
+            prev_camera = self.prev_camera or self.dscene.camera  # unread without temporal reuse
+            self.run_stage("trace_temporal", trace_temporal,
+                           [sc, p, int(temporal), prev_camera, gb.current, gb.previous, res.previous],
                            [res.current, self.shift_events])
             if temporal:
                 self.count_shifts("temporal")
