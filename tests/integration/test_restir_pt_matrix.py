@@ -35,6 +35,7 @@ MATRIX = {
     "C2-cap-20": ({**TEMPORAL, "temporal.cap": 20.0}, "none"),
     "C2-no-cap": ({**TEMPORAL, "temporal.cap": 0.0}, "none"),
     "C4-defaults": ({}, "none"),
+    "C4-cap-5": ({"temporal.cap": 5.0}, "none"),  # the cap the denoised equal-time measurement favours (BENCHMARKS.md)
     "C4-direct-pt": ({"direct": "pt"}, "none"),
     "C4-k8-rounds-2": ({"spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     "C4-orbit": ({}, "orbit"),
