@@ -26,6 +26,11 @@ class Mutations:
     def __len__(self) -> int:
         return len(self.builds)
 
+    def builds_kernels(self, name: str) -> bool:
+        """Whether `name` is a fault injection built into the stage kernels (not "none", and not a
+        mutation of the pipeline)."""
+        return self.builds[name] is not None
+
     def kernels(self, name: str) -> tuple:
         """The stage kernels of the build `name`."""
         build = self.builds[name]

@@ -92,7 +92,7 @@ class ReSTIRDI(Integrator):
         settings.spatial.check(DI_MAX_NEIGHBORS)
         if settings.debug_mutation not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")
-        if settings.stages_split and settings.debug_mutation not in ("none", "bsdf_unshadowed_reuse"):
+        if settings.stages_split and MUTATIONS.builds_kernels(settings.debug_mutation):
             raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
     def kernels(self) -> tuple:

@@ -60,44 +60,41 @@ def make_temporal_reuse(skip_zero_canonical: bool = False, overweight_history: b
     @wp.func(module=_mutant_module(skip_zero_canonical, overweight_history))
     def temporal_reuse(scene: SceneDevice, params: DIParams, prev_camera: Camera, prev_gb: GBuffer,
                        prev_reservoirs: wp.array(dtype=DIReservoir), c: DIReservoir, sc: Shading, pixel: int):
-        out = c
-        events = wp.vec4i(0)
-        if sc.valid != 0:
-            # ---- the temporal technique: where this hit was seen last frame (geometry only)
-            nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
-            if nq.pixel != NO_PIXEL:
-                q = nq.pixel
-                sq = nq.sh
-                vis = params.visibility
-                p_c = own_target(scene, sc, c, vis)
-                skip = int(0)
-                if wp.static(skip_zero_canonical):
-                    if p_c * c.W == 0.0:
-                        skip = 1
-                if skip == 0:
-                    r = prev_reservoirs[q]
-                    Mq = cap_history(r.M, params.temporal_cap, c.M)
-                    key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_TEMPORAL), wp.uint32(pixel))
-                    base = wp.uint32(params.sample) * wp.uint32(DI_TEMPORAL_DIMS_PER_SAMPLE)
-                    s = ris_init()
-                    # ---- the current sample, against the history's density for it
-                    t_q = target(scene, sq, c, vis)
-                    m_c = talbot_weight2(p_c * c.M, t_q[0] * Mq, CURRENT)
-                    s = ris_merge(s, m_c, p_c, 1.0, c.W, c.M, CURRENT, rng_uniform(key, base))
-                    # ---- the history's sample, moved to this pixel (J = 1)
-                    t_c = target(scene, sc, r, vis)
-                    p_c_at_q = t_c[0]
-                    m_q = talbot_weight2(p_c_at_q * c.M, own_target(scene, sq, r, vis) * Mq, HISTORY)
-                    if wp.static(overweight_history):
-                        m_q = m_q * 1.5
-                    s = ris_merge(s, m_q, p_c_at_q, 1.0, r.W, Mq, HISTORY, rng_uniform(key, base + wp.uint32(1)))
-                    chosen = c
-                    if s.selected == HISTORY:
-                        chosen = r
-                    out = store(chosen, ris_finalize(s, 1.0))
-                    failed = wp.where(r.W > 0.0 and p_c_at_q <= 0.0, 1, 0)
-                    events = stage_events(s, failed, int(t_q[1] + t_c[1]))
-        return out, events
+        none = wp.vec4i(0)
+        if sc.valid == 0:
+            return c, none
+        # ---- the temporal technique: where this hit was seen last frame (geometry only)
+        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        if nq.pixel == NO_PIXEL:
+            return c, none
+        q = nq.pixel
+        sq = nq.sh
+        vis = params.visibility
+        p_c = own_target(scene, sc, c, vis)
+        if wp.static(skip_zero_canonical):
+            if p_c * c.W == 0.0:
+                return c, none
+        r = prev_reservoirs[q]
+        Mq = cap_history(r.M, params.temporal_cap, c.M)
+        key = rng_key(params.seed, params.frame, wp.uint32(STAGE_DI_TEMPORAL), wp.uint32(pixel))
+        base = wp.uint32(params.sample) * wp.uint32(DI_TEMPORAL_DIMS_PER_SAMPLE)
+        s = ris_init()
+        # ---- the current sample, against the history's density for it
+        t_q = target(scene, sq, c, vis)
+        m_c = talbot_weight2(p_c * c.M, t_q[0] * Mq, CURRENT)
+        s = ris_merge(s, m_c, p_c, 1.0, c.W, c.M, CURRENT, rng_uniform(key, base))
+        # ---- the history's sample, moved to this pixel (J = 1)
+        t_c = target(scene, sc, r, vis)
+        p_c_at_q = t_c[0]
+        m_q = talbot_weight2(p_c_at_q * c.M, own_target(scene, sq, r, vis) * Mq, HISTORY)
+        if wp.static(overweight_history):
+            m_q = m_q * 1.5
+        s = ris_merge(s, m_q, p_c_at_q, 1.0, r.W, Mq, HISTORY, rng_uniform(key, base + wp.uint32(1)))
+        chosen = c
+        if s.selected == HISTORY:
+            chosen = r
+        failed = wp.where(r.W > 0.0 and p_c_at_q <= 0.0, 1, 0)
+        return store(chosen, ris_finalize(s, 1.0)), stage_events(s, failed, int(t_q[1] + t_c[1]))
 
     _built[skip_zero_canonical, overweight_history] = temporal_reuse
     return temporal_reuse

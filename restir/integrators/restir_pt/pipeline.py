@@ -94,7 +94,7 @@ class ReSTIRPT(PathReuseIntegrator):
             raise ConfigError(f"mcmc.steps must be in [0, {PT_MAX_MCMC_STEPS}]")
         if settings.mcmc_start not in ("z", "rc_prev"):
             raise ConfigError("mcmc.start must be z or rc_prev")
-        if settings.stages_split and MUTATIONS.builds[settings.debug_mutation] is not None:
+        if settings.stages_split and MUTATIONS.builds_kernels(settings.debug_mutation):
             raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
     def kernels(self) -> tuple:

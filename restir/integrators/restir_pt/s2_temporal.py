@@ -38,42 +38,42 @@ from ..path_reuse.shift import shift_path
 from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
 from .s1_initial import make_initial_reservoir
 
+_built: dict = {}
+
 
 def make_temporal_reuse(shift=shift_path, drop_failed: bool = False, module=None):
     """The stage's work for one pixel as a function: (reservoir, shift counts, events) from the
     pixel's new reservoir c and shading point sc. drop_failed builds the mutation that drops a
-    history whose shift failed (its M and its density in the current sample's weight)."""
+    history whose shift failed (its M and its density in the current sample's weight). Built once
+    per (shift, drop_failed, module): the split and the fused kernels call the same function."""
+    if (shift, drop_failed, module) in _built:
+        return _built[shift, drop_failed, module]
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.func(module=module or KERNEL_MODULE)
     def temporal_reuse(scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, prev_gb: GBuffer,
                        prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir, sc: Shading, pixel: int):
-        out = c
-        shifts = wp.vec4i(0)
-        events = wp.vec4i(0)
-        if sc.valid != 0:
-            nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
-            if nq.pixel != NO_PIXEL:
-                q = nq.pixel
-                dc = domain_at(sc, params)
-                dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
-                r = prev_reservoirs[q]
-                Mq = cap_history(r.M, params.temporal_cap, c.M)
-                key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
-                base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-                dropped = int(0)
-                if wp.static(drop_failed):
-                    if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
-                        dropped = 1
-                if dropped == 0:
-                    # ---- the history's sample shifted here, and the current sample there (its density there)
-                    st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base),
-                                       rng_uniform(key, base + wp.uint32(1)))
-                    shifts = st.tl.counts
-                    out = store(st.chosen, ris_finalize(st.s, 1.0))
-                    events = stage_events(st.s, st.tl.failed, st.tl.rays)
-        return out, shifts, events
+        none = wp.vec4i(0)
+        if sc.valid == 0:
+            return c, none, none
+        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        if nq.pixel == NO_PIXEL:
+            return c, none, none
+        q = nq.pixel
+        dc = domain_at(sc, params)
+        dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
+        r = prev_reservoirs[q]
+        Mq = cap_history(r.M, params.temporal_cap, c.M)
+        key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_TEMPORAL), wp.uint32(pixel))
+        base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
+        if wp.static(drop_failed):
+            if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
+                return c, none, none
+        # ---- the history's sample shifted here, and the current sample there (its density there)
+        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
+        return store(st.chosen, ris_finalize(st.s, 1.0)), st.tl.counts, stage_events(st.s, st.tl.failed, st.tl.rays)
 
+    _built[shift, drop_failed, module] = temporal_reuse
     return temporal_reuse
 
 
