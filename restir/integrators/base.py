@@ -21,9 +21,9 @@ from ..film import SampleFilm, film_add_kernel
 from ..parallel import launch_pixels
 from ..settings import Settings
 from ..timing import BufferRegistry, StageTimer
-from .common.events import COUNTER_NAMES, EV_RAYS
+from .common.events import COUNTER_NAMES, EV_RAYS, EV_SATURATED, EventCounts
 from .common.mutations import Mutations
-from .common.tally import EventTally, tally_kernel
+from .common.tally import EventTally, tally_counts_kernel, tally_events_kernel
 
 
 COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
@@ -72,7 +72,7 @@ class Integrator:
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
         self.on_samples = None  # progress hook within a frame: on_samples(samples_done, spp), if set
-        self.events = self.buffer("events", wp.vec4i)  # per-stage scratch, summed into the tally
+        self.events = self.buffer("events", EventCounts)  # per-stage scratch, summed into the tally
         self.tally = EventTally(self.device)  # the events' sums on the device, read once per frame
         self._film = None
         self.allocate()
@@ -81,7 +81,7 @@ class Integrator:
             timer.daemon = True
             timer.start()
         try:
-            for k in (*self.kernels(), tally_kernel, film_add_kernel):
+            for k in (*self.kernels(), tally_events_kernel, tally_counts_kernel, film_add_kernel):
                 wp.load_module(k.module, device=self.device)
         finally:
             if timer is not None:
@@ -109,7 +109,7 @@ class Integrator:
 
     def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights",
                   new_call: bool = True) -> None:
-        """Launch one stage over the pixels, timed. Every stage kernel takes `events` (one vec4i per
+        """Launch one stage over the pixels, timed. Every stage kernel takes `events` (8 bytes per
         pixel, common/events.py) as its last output; they are summed on the device (the tally,
         read into the counters once per frame), non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
         stages that write radiance). new_call=False: a further part of the same run of the stage
@@ -122,8 +122,13 @@ class Integrator:
 
     def collect_events(self) -> None:
         """Read the tally (once per frame: the one wait for the device's sums) into the counters,
-        the rays per stage, and the method's own sums (`take_tally`)."""
+        the rays per stage, and the method's own sums (`take_tally`). Per-pixel counts that
+        saturated their packed fields (events.py) make the sums lower bounds: counted, so the stats
+        say so."""
         for key, ev in self.tally.read().items():
+            if ev[EV_SATURATED]:
+                self.counters["saturated_counts"] = self.counters.get("saturated_counts", 0) + int(ev[EV_SATURATED])
+            ev = ev[:EV_SATURATED]
             if key[0] != "stage":
                 self.take_tally(key, ev)
                 continue

@@ -35,7 +35,7 @@ from ..device.types import ENV_NONE, STRATEGY_BSDF, STRATEGY_MIS, STRATEGY_NEE
 from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
-from .common.events import output_events, ray_events
+from .common.events import EventCounts, output_events, packed_events, ray_events
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
@@ -149,7 +149,7 @@ def make_path_trace_kernel(several_light_samples: bool):
         params: PTParams,
         frame_mean: wp.array(dtype=wp.vec3),
         frame_m2: wp.array(dtype=wp.vec3),
-        events: wp.array(dtype=wp.vec4i),
+        events: wp.array(dtype=EventCounts),
     ):
         pixel = wp.tid() + offset
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PATH_TRACE), wp.uint32(pixel))
@@ -168,9 +168,9 @@ def make_path_trace_kernel(several_light_samples: bool):
         frame_mean[pixel] = acc.mean
         frame_m2[pixel] = acc.m2
         if params.sample_end == params.spp:  # a non-finite mean is counted once, when the frame is done
-            events[pixel] = output_events(acc.mean, rays)
+            events[pixel] = packed_events(output_events(acc.mean, rays))
         else:
-            events[pixel] = ray_events(rays)
+            events[pixel] = packed_events(ray_events(rays))
 
     return path_trace_kernel
 

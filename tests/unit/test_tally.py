@@ -1,34 +1,74 @@
-"""The event tally (integrators/common/tally.py): device-side sums of per-pixel vec4i events equal
-numpy's int64 sums, at chunk boundaries and across several adds to one key; a read empties it."""
+"""The event tally (integrators/common/tally.py): device-side sums of the packed per-pixel counts
+(events.py) equal numpy's int64 sums, at chunk boundaries and across several adds to one key; a read empties it."""
 import numpy as np
 import warp as wp
 
+from restir.integrators.common.events import EventCounts, PassCounts, packed_counts, packed_events
 from restir.integrators.common.tally import EventTally
 
 
+@wp.kernel
+def pack_kernel(raw: wp.array(dtype=wp.vec4i), events: wp.array(dtype=EventCounts), counts: wp.array(dtype=PassCounts)):
+    i = wp.tid()
+    events[i] = packed_events(raw[i])
+    counts[i] = packed_counts(raw[i])
+
+
+def packed(raw: np.ndarray):
+    """raw (n, 4) int32 counts through the stages' own packing functions."""
+    n = raw.shape[0]
+    events = wp.zeros(n, dtype=EventCounts, device="cpu")
+    counts = wp.zeros(n, dtype=PassCounts, device="cpu")
+    wp.launch(pack_kernel, dim=n, inputs=[wp.array(raw, dtype=wp.vec4i, device="cpu")], outputs=[events, counts],
+              device="cpu")
+    return events, counts
+
+
 def test_tally_sums_match_numpy():
+    """Counts within the packed fields' range: the sums are exact, with nothing saturated."""
     wp.init()
     tally = EventTally("cpu")
     rng = np.random.default_rng(1)
     for n in (1, 255, 256, 257, 100_000):
-        ev = rng.integers(-5, 1000, size=(n, 4)).astype(np.int32)
-        a = wp.array(ev, dtype=wp.vec4i, device="cpu")
-        tally.add(("stage", n), a)
-        tally.add(("stage", n), a)
-        tally.add(("half", n), a, n // 2)
+        raw = rng.integers(0, 1000, size=(n, 4)).astype(np.int32)
+        raw[:, 3] = rng.integers(0, 2 ** 31 - 1, size=n)  # rays: 32 bits in events, 16 in pass counts
+        events, counts = packed(raw)
+        raw_counts = raw.copy()
+        raw_counts[:, 3] %= 65535
+        counts = packed(raw_counts)[1]
+        tally.add(("stage", n), events)
+        tally.add(("stage", n), events)
+        tally.add(("half", n), events, n // 2)
+        tally.add(("counts", n), counts)
         got = tally.read()
-        np.testing.assert_array_equal(got[("stage", n)], 2 * ev.sum(0, dtype=np.int64))
+        sums = raw.sum(0, dtype=np.int64)
+        np.testing.assert_array_equal(got[("stage", n)], [*(2 * sums), 0])
+        np.testing.assert_array_equal(got[("counts", n)], [*raw_counts.sum(0, dtype=np.int64), 0])
         if n // 2:
-            np.testing.assert_array_equal(got[("half", n)], ev[: n // 2].sum(0, dtype=np.int64))
+            np.testing.assert_array_equal(got[("half", n)], [*raw[: n // 2].sum(0, dtype=np.int64), 0])
         assert tally.read() == {}
+
+
+def test_counts_saturate_and_are_reported():
+    """A count past its field saturates (never wraps into another field) and is counted as such."""
+    wp.init()
+    tally = EventTally("cpu")
+    raw = np.array([[1024, 5, 70000, 7], [3, 2000, 1, 70000], [-1, 0, 0, 0]], np.int32)
+    events, counts = packed(raw)
+    tally.add("e", events)
+    tally.add("c", counts)
+    got = tally.read()
+    np.testing.assert_array_equal(got["e"], [1023 + 3, 5 + 1023, 1023 + 1, 7 + 70000, 3])
+    np.testing.assert_array_equal(got["c"], [1024 + 3, 5 + 2000, 65535 + 1, 7 + 65535, 2])
 
 
 def test_tally_does_not_overflow_int32():
     wp.init()
     tally = EventTally("cpu")
-    big = wp.array(np.full((4096, 4), 2 ** 30, np.int32), dtype=wp.vec4i, device="cpu")
-    tally.add("rays", big)
-    assert tally.read()["rays"].tolist() == [4096 * 2 ** 30] * 4
+    raw = np.zeros((4096, 4), np.int32)
+    raw[:, 3] = 2 ** 30
+    tally.add("rays", packed(raw)[0])
+    assert tally.read()["rays"].tolist() == [0, 0, 0, 4096 * 2 ** 30, 0]
 
 
 def test_sample_film_matches_pixel_moments():

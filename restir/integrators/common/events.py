@@ -1,8 +1,15 @@
 """Per-pixel event counts that every stage writes and the stage runner sums into counters.
 
-A vec4i per pixel: [non-finite resampling weights or outputs, zero-weight resampling inputs,
-failed shifts, rays traced]. A shift "fails" when a reused sample with W > 0 has target 0 in the
-destination domain (it lands outside the destination's support). Counted, never hidden.
+A stage counts in a vec4i: [non-finite resampling weights or outputs, zero-weight resampling
+inputs, failed shifts, rays traced]. A shift "fails" when a reused sample with W > 0 has target 0
+in the destination domain (it lands outside the destination's support). Counted, never hidden.
+
+The per-pixel scratch the counts are written to is packed to 8 bytes (`EventCounts`, issue 22's
+memory): the rays in 32 bits, the three rare counts in 10 bits each. A pass's other per-pixel
+counts (shifts tried and succeeded, samples by origin, gather slots) are four 16-bit counts
+(`PassCounts`). Both saturate instead of wrapping, and the tally counts every saturated field,
+so a count that did not fit is reported as a lower bound, never silently wrong (a pixel meets
+1023 non-finite weights in one stage only with more than 1023 candidates).
 """
 import warp as wp
 
@@ -12,7 +19,31 @@ EV_NONFINITE = wp.constant(0)
 EV_ZERO_WEIGHT = wp.constant(1)
 EV_FAILED_SHIFT = wp.constant(2)
 EV_RAYS = wp.constant(3)
+EV_SATURATED = 4  # the tally's fifth sum: fields that saturated
 COUNTER_NAMES = ("nonfinite", "zero_weight_inputs", "failed_shifts")
+
+EventCounts = wp.vec2ui  # (rays, the three counts in bits 0-9, 10-19, 20-29)
+PassCounts = wp.vec4us
+COUNT_BITS = wp.constant(10)
+COUNT_MAX = wp.constant(1023)          # a packed event count's largest value
+PASS_COUNT_MAX = wp.constant(65535)    # a pass count's
+
+
+@wp.func
+def packed_events(e: wp.vec4i) -> EventCounts:
+    """A stage's counts as the pixel's 8 bytes of event scratch (counts above the fields' range
+    saturate; the tally reports them)."""
+    c = wp.uint32(0)
+    for i in range(3):
+        c = c | (wp.uint32(wp.clamp(e[i], 0, COUNT_MAX)) << wp.uint32(COUNT_BITS * i))
+    return EventCounts(wp.uint32(wp.max(e[3], 0)), c)
+
+
+@wp.func
+def packed_counts(n: wp.vec4i) -> PassCounts:
+    """A pass's four per-pixel counts in 16 bits each (saturating; the tally reports it)."""
+    return PassCounts(wp.uint16(wp.clamp(n[0], 0, PASS_COUNT_MAX)), wp.uint16(wp.clamp(n[1], 0, PASS_COUNT_MAX)),
+                      wp.uint16(wp.clamp(n[2], 0, PASS_COUNT_MAX)), wp.uint16(wp.clamp(n[3], 0, PASS_COUNT_MAX)))
 
 
 @wp.func

@@ -12,14 +12,14 @@ from ...device.intersect import T_MAX, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.scene_device import SceneDevice
 from ...device.types import ENV_NONE
-from .events import ray_events
+from .events import EventCounts, packed_events, ray_events
 from .gbuffer import GBuffer
 
 
 @wp.kernel
 def primary_hits_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32, frame: wp.uint32,
                         sample: int, hide_emitters: int, gb: GBuffer, weight: wp.array(dtype=float),
-                        emission: wp.array(dtype=wp.vec3), events: wp.array(dtype=wp.vec4i)):
+                        emission: wp.array(dtype=wp.vec3), events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     ray = camera_ray(camera, seed, frame, pixel, sample)
     hit = trace_closest(scene, ray.o, ray.d, T_MAX)
@@ -35,4 +35,4 @@ def primary_hits_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: w
         elif scene.env_kind != ENV_NONE:
             Le = env_eval(scene, ray.d)
     emission[pixel] = Le * ray.weight
-    events[pixel] = ray_events(1)
+    events[pixel] = packed_events(ray_events(1))

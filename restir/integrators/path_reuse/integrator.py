@@ -10,6 +10,7 @@ from ...device.streams import PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
 from ...settings import Settings, setting
 from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
+from ..common.events import PassCounts
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
@@ -94,7 +95,7 @@ class PathReuseIntegrator(Integrator):
         self.pass_out = self.buffer(f"{self.RESERVOIRS}_pass", PathReservoir) if self.wants_pass_buffer() else None
         self.sample_L = self.buffer("sample_L", wp.vec3)
         # per-pass scratch for the stats, like `events`: shift counts in reuse passes
-        self.shift_events = self.buffer("shift_events", wp.vec4i)
+        self.shift_events = self.buffer("shift_events", PassCounts)
         self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
         self.prev_camera = None
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers

@@ -28,7 +28,7 @@ from ...device.streams import (DI_DIM_CANDIDATE_POINT, DI_DIM_CANDIDATE_RIS, DI_
                                DI_DIMS_PER_CANDIDATE, DIMS_PER_SAMPLE, STAGE_DI_INITIAL)
 from ...device.types import ENV_NONE, LIGHT_ENV
 from ...resampling.ris import ris_finalize, ris_init, ris_stream
-from ..common.events import stage_events
+from ..common.events import EventCounts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import Shading, load_shading_outlined
 from .kernel_module import SPLIT_MODULE
@@ -118,9 +118,9 @@ def initial_reservoir(scene: SceneDevice, params: DIParams, sh: Shading, pixel: 
 
 @wp.kernel(module=SPLIT_MODULE)
 def initial_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
-                   reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
+                   reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=EventCounts)):
     """The stage on its own (`stages.split`)."""
     pixel = wp.tid() + offset
     r, ev = initial_reservoir(scene, params, load_shading_outlined(scene, gb, pixel), pixel)
     reservoirs[pixel] = r
-    events[pixel] = ev
+    events[pixel] = packed_events(ev)

@@ -12,7 +12,7 @@ Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffe
 import warp as wp
 
 from ...device.scene_device import SceneDevice
-from ..common.events import ray_events
+from ..common.events import EventCounts, packed_events, ray_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import Shading, load_shading
 from .kernel_module import SPLIT_MODULE
@@ -35,9 +35,9 @@ def visible_reservoir(scene: SceneDevice, sh: Shading, r: DIReservoir):
 @wp.kernel(module=SPLIT_MODULE)
 def visibility_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
                       reservoirs_in: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
-                      events: wp.array(dtype=wp.vec4i)):
+                      events: wp.array(dtype=EventCounts)):
     """The stage on its own (`stages.split`)."""
     pixel = wp.tid() + offset
     r, ev = visible_reservoir(scene, load_shading(scene, gb, pixel), reservoirs_in[pixel])
     reservoirs_out[pixel] = r
-    events[pixel] = ev
+    events[pixel] = packed_events(ev)

@@ -25,7 +25,7 @@ from ...device.scene_device import SceneDevice
 from ...device.streams import DI_TEMPORAL_DIMS_PER_SAMPLE, STAGE_DI_TEMPORAL
 from ...resampling.mis import talbot_weight2
 from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
-from ..common.events import stage_events
+from ..common.events import EventCounts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import Shading, load_shading, load_shading_outlined
@@ -107,12 +107,12 @@ temporal_reuse = make_temporal_reuse()
 def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_camera: Camera, gb: GBuffer,
                     prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=DIReservoir),
                     reservoirs: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
-                    events: wp.array(dtype=wp.vec4i)):
+                    events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     r, ev = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
                            load_shading(scene, gb, pixel), pixel)
     reservoirs_out[pixel] = r
-    events[pixel] = ev
+    events[pixel] = packed_events(ev)
 
 
 def make_initial_temporal_kernel(skip_zero_canonical: bool = False, overweight_history: bool = False):
@@ -124,7 +124,7 @@ def make_initial_temporal_kernel(skip_zero_canonical: bool = False, overweight_h
     def initial_temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, temporal: int,
                                 prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
                                 prev_reservoirs: wp.array(dtype=DIReservoir),
-                                reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=wp.vec4i)):
+                                reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         sc = load_shading_outlined(scene, gb, pixel)
         c, ev = initial_reservoir(scene, params, sc, pixel)
@@ -135,7 +135,7 @@ def make_initial_temporal_kernel(skip_zero_canonical: bool = False, overweight_h
             c, ev_t = reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
-        events[pixel] = ev
+        events[pixel] = packed_events(ev)
 
     return initial_temporal_kernel
 

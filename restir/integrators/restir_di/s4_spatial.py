@@ -18,7 +18,7 @@ from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, 
                                DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_DI_SPATIAL)
 from ...resampling.mis import pairwise_add_neighbor, pairwise_init, pairwise_normalization
 from ...resampling.ris import ris_finalize, ris_init, ris_merge
-from ..common.events import stage_events
+from ..common.events import EventCounts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_technique
 from ..common.shading import load_shading
@@ -37,10 +37,10 @@ def make_spatial_kernel(skip_zero_canonical: bool = False, drop_empty_neighbors:
     @wp.kernel(module="unique" if mutated else None)
     def spatial_kernel(offset: int, scene: SceneDevice, params: DIParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
-                       events: wp.array(dtype=wp.vec4i)):
+                       events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         c = reservoirs_in[pixel]
-        events[pixel] = wp.vec4i(0)
+        events[pixel] = packed_events(wp.vec4i(0))
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             reservoirs_out[pixel] = c
@@ -89,7 +89,7 @@ def make_spatial_kernel(skip_zero_canonical: bool = False, drop_empty_neighbors:
         if s.selected == CANONICAL:
             chosen = c
         reservoirs_out[pixel] = store(chosen, ris_finalize(s, pairwise_normalization(mis)))
-        events[pixel] = stage_events(s, failed, int(rays))
+        events[pixel] = packed_events(stage_events(s, failed, int(rays)))
 
     return spatial_kernel
 

@@ -17,7 +17,7 @@ from ...device.sampling import to_world
 from ...device.scene_device import SceneDevice
 from ...device.streams import DI_DIM_SHADE_DIR, DI_DIM_SHADE_LOBE, DIMS_PER_SAMPLE, STAGE_DI_SHADE
 from ...device.types import ENV_NONE
-from ..common.events import output_events
+from ..common.events import EventCounts, output_events, packed_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import load_shading
 from .params import DIParams
@@ -28,7 +28,7 @@ from .reservoir import DIReservoir, light_visible, unshadowed_contribution
 def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
                  primary_weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
                  reservoirs: wp.array(dtype=DIReservoir), sample_L: wp.array(dtype=wp.vec3),
-                 events: wp.array(dtype=wp.vec4i)):
+                 events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     L = emission[pixel]
     rays = int(0)
@@ -62,4 +62,4 @@ def shade_kernel(offset: int, scene: SceneDevice, params: DIParams, gb: GBuffer,
                 Le = env_eval(scene, d)
             L += wp.cw_mul(bs.weight, Le) * weight
     sample_L[pixel] = L
-    events[pixel] = output_events(L, rays)
+    events[pixel] = packed_events(output_events(L, rays))

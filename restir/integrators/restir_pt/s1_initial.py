@@ -13,7 +13,7 @@ from ...device.rng import hash_combine, rng_key
 from ...device.scene_device import SceneDevice
 from ...device.streams import STAGE_PT_PATHS, STAGE_PT_RIS
 from ...resampling.ris import ris_finalize, ris_init
-from ..common.events import stage_events
+from ..common.events import EventCounts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import Shading, load_shading
 from ..path_reuse.base_path import EVENTS_PER_PATH, BasePath, trace_base_path
@@ -64,9 +64,9 @@ initial_reservoir = make_initial_reservoir()
 
 @wp.kernel(module=SPLIT_MODULE)
 def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
-                   reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=wp.vec4i)):
+                   reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=EventCounts)):
     """The stage on its own (`stages.split`)."""
     pixel = wp.tid() + offset
     r, ev = initial_reservoir(scene, params, load_shading(scene, gb, pixel), pixel)
     reservoirs[pixel] = r
-    events[pixel] = ev
+    events[pixel] = packed_events(ev)

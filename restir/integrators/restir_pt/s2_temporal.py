@@ -26,7 +26,7 @@ from ...device.rng import rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import PT_TEMPORAL_DIMS_PER_SAMPLE, STAGE_PT_TEMPORAL
 from ...resampling.ris import cap_history, ris_finalize
-from ..common.events import stage_events
+from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import Shading, load_shading
@@ -85,13 +85,13 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
     def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                        shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                        shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         r, n, ev = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
                                   load_shading(scene, gb, pixel), pixel)
         reservoirs_out[pixel] = r
-        shifts[pixel] = n
-        events[pixel] = ev
+        shifts[pixel] = packed_counts(n)
+        events[pixel] = packed_events(ev)
 
     return temporal_kernel
 
@@ -107,8 +107,8 @@ def make_trace_temporal_kernel(shift=shift_path, drop_failed: bool = False, m_pe
     def trace_temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, temporal: int,
                               prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
                               prev_reservoirs: wp.array(dtype=PathReservoir),
-                              reservoirs: wp.array(dtype=PathReservoir), shifts: wp.array(dtype=wp.vec4i),
-                              events: wp.array(dtype=wp.vec4i)):
+                              reservoirs: wp.array(dtype=PathReservoir), shifts: wp.array(dtype=PassCounts),
+                              events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         sc = load_shading(scene, gb, pixel)
         c, ev = initial(scene, params, sc, pixel)
@@ -117,8 +117,8 @@ def make_trace_temporal_kernel(shift=shift_path, drop_failed: bool = False, m_pe
             c, n, ev_t = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
-        shifts[pixel] = n
-        events[pixel] = ev
+        shifts[pixel] = packed_counts(n)
+        events[pixel] = packed_events(ev)
 
     return trace_temporal_kernel
 

@@ -19,7 +19,7 @@ from ...device.color import luminance
 from ...device.rng import hash_combine, rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import PT_MAX_MCMC_STEPS, PT_MCMC_DIM_ACCEPT, STAGE_PT_MCMC
-from ..common.events import ray_events
+from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, ray_events
 from ..common.gbuffer import GBuffer
 from ..common.shading import load_shading
 from ..path_reuse.domain import domain_at
@@ -41,12 +41,12 @@ def make_mcmc_kernel(mutation: str = "none", module=None):
     @wp.kernel(module=module or KERNEL_MODULE)
     def mcmc_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, steps: int, from_rc_prev: int, gb: GBuffer,
                     reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                    counts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                    counts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         r = reservoirs[pixel]
         reservoirs_out[pixel] = r
-        counts[pixel] = wp.vec4i(0)
-        events[pixel] = wp.vec4i(0)
+        counts[pixel] = packed_counts(wp.vec4i(0))
+        events[pixel] = packed_events(wp.vec4i(0))
         if not mutable(r):
             return
         sh = load_shading(scene, gb, pixel)
@@ -80,8 +80,8 @@ def make_mcmc_kernel(mutation: str = "none", module=None):
                     r.W = W
                     n[2] += 1
         reservoirs_out[pixel] = r
-        counts[pixel] = n
-        events[pixel] = ray_events(rays)
+        counts[pixel] = packed_counts(n)
+        events[pixel] = packed_events(ray_events(rays))
 
     return mcmc_kernel
 

@@ -15,7 +15,7 @@ from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, 
                                DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_PT_SPATIAL)
 from ...resampling.mis import pairwise_normalization
 from ...resampling.ris import ris_finalize
-from ..common.events import stage_events
+from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_technique
 from ..common.shading import load_shading
@@ -35,11 +35,11 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
     @wp.kernel(module=module or KERNEL_MODULE)
     def spatial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                       shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                       shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         c = reservoirs_in[pixel]
-        events[pixel] = wp.vec4i(0)
-        shifts[pixel] = wp.vec4i(0)
+        events[pixel] = packed_events(wp.vec4i(0))
+        shifts[pixel] = packed_counts(wp.vec4i(0))
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             reservoirs_out[pixel] = c
@@ -63,8 +63,8 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
                                   rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
         st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))
-        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
-        shifts[pixel] = st.tl.counts
+        events[pixel] = packed_events(stage_events(st.s, st.tl.failed, st.tl.rays))
+        shifts[pixel] = packed_counts(st.tl.counts)
 
     return spatial_kernel
 

@@ -9,7 +9,7 @@ sample came from the pixel's own base path, temporal or spatial reuse; for the s
 """
 import warp as wp
 
-from ..common.events import output_events
+from ..common.events import EventCounts, PassCounts, output_events, packed_counts, packed_events
 from ..path_reuse.path_sample import PathReservoir, holds_path, origin
 from .kernel_module import KERNEL_MODULE
 
@@ -17,7 +17,7 @@ from .kernel_module import KERNEL_MODULE
 @wp.kernel(module=KERNEL_MODULE)
 def shade_kernel(offset: int, reservoirs: wp.array(dtype=PathReservoir), direct: wp.array(dtype=wp.vec3),
                  primary_weight: wp.array(dtype=float), sample_L: wp.array(dtype=wp.vec3),
-                 origins: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                 origins: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     L = direct[pixel]
     r = reservoirs[pixel]
@@ -25,6 +25,6 @@ def shade_kernel(offset: int, reservoirs: wp.array(dtype=PathReservoir), direct:
     if holds_path(r) and r.W > 0.0:
         L += r.F * (r.W * primary_weight[pixel])
         o[origin(r.flags)] = 1
-    origins[pixel] = o
+    origins[pixel] = packed_counts(o)
     sample_L[pixel] = L
-    events[pixel] = output_events(L, 0)
+    events[pixel] = packed_events(output_events(L, 0))

@@ -13,6 +13,7 @@ import warp as wp
 
 from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
 from ...settings import MUTATION_DOC, setting
+from ..common.events import PassCounts
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
@@ -188,7 +189,7 @@ class SuffixReSTIR(PathReuseIntegrator):
             for name, dtype in (("keys", wp.int32), ("ids", wp.int32), ("entries", GridEntry), ("ranges", wp.vec2i)):
                 setattr(self.search, name, wp.zeros(0, dtype=dtype, device=self.device))
         self.structure = None
-        self.gather_slots = self.buffer("gather_slots", wp.vec4i)
+        self.gather_slots = self.buffer("gather_slots", PassCounts)
         self.slot_counts = np.zeros(3, np.int64)  # gather slots filled by the search, by the fallback, empty
         host = self.dscene.host
         lo, hi = host.bounds()

@@ -22,7 +22,7 @@ from ...device.scene_device import SceneDevice
 from ...device.streams import SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE, STAGE_SR_PREFIX, STAGE_SR_PREFIX_TEMPORAL
 from ...resampling.mis import talbot_weight2
 from ...resampling.ris import cap_history, ris_finalize, ris_init, ris_merge
-from ..common.events import stage_events
+from ..common.events import EventCounts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import Shading, load_shading
@@ -80,7 +80,7 @@ def fresh_prefix(scene: SceneDevice, params: SRParams, sh: Shading, pixel: int) 
 @wp.kernel(module=KERNEL_MODULE)
 def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, prev_camera: Camera, gb: GBuffer,
                   prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
-                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=wp.vec4i)):
+                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     sc = load_shading(scene, gb, pixel)
     fresh = fresh_prefix(scene, params, sc, pixel)
@@ -88,7 +88,7 @@ def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: i
     prefixes[pixel] = c
     write_end(prefix_gb, pixel, wp.where(has_prefix(c), fresh.end.hit.tri, -1), fresh.end.hit.bary, fresh.dist,
               fresh.dir)
-    events[pixel] = wp.vec4i(0, 0, 0, fresh.rays)
+    events[pixel] = packed_events(wp.vec4i(0, 0, 0, fresh.rays))
     if temporal == 0 or sc.valid == 0:
         return
     nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
@@ -132,4 +132,4 @@ def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: i
     out.M = f.M
     prefixes[pixel] = out
     failed = wp.where(has_prefix(r) and r.W > 0.0 and hist.valid == 0, 1, 0)
-    events[pixel] = stage_events(s, failed, fresh.rays + hist.rays + cur.rays)
+    events[pixel] = packed_events(stage_events(s, failed, fresh.rays + hist.rays + cur.rays))

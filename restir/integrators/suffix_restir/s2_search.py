@@ -27,7 +27,7 @@ import warp as wp
 from ...device.intersect import surface_at
 from ...device.scene_device import SceneDevice
 from ...device.streams import SR_MAX_GATHER_SUFFIXES
-from ..common.events import ray_events
+from ..common.events import EventCounts, packed_events, ray_events
 from ..common.gbuffer import GBuffer
 from .params import KERNEL_MODULE
 from .prefix import PrefixReservoir, has_prefix
@@ -81,7 +81,7 @@ def box_center(scene: SceneDevice, prefix_gb: GBuffer, pixel: int) -> wp.vec3:
 def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, box_half: float, far: wp.vec3,
                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, centers: wp.array(dtype=wp.vec3),
                  halves: wp.array(dtype=float), lowers: wp.array(dtype=wp.vec3), uppers: wp.array(dtype=wp.vec3),
-                 events: wp.array(dtype=wp.vec4i)):
+                 events: wp.array(dtype=EventCounts)):
     """Reads: the resampled prefixes and their ends. Writes: the boxes (centre and half-size, and
     for the BVH its lower and upper corners), events."""
     pixel = wp.tid() + offset
@@ -99,7 +99,7 @@ def boxes_kernel(offset: int, scene: SceneDevice, box_scale: float, box_half: fl
     if lowers.shape[0] > 0:  # the BVH's corners (empty arrays with the hash grid)
         lowers[pixel] = c - wp.vec3(h)
         uppers[pixel] = c + wp.vec3(h)
-    events[pixel] = ray_events(0)
+    events[pixel] = packed_events(ray_events(0))
 
 
 @wp.struct
@@ -234,7 +234,7 @@ def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -
 
 @wp.kernel(module=KERNEL_MODULE)
 def grid_keys_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search: SearchStructure,
-                     keys: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), events: wp.array(dtype=wp.vec4i)):
+                     keys: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), events: wp.array(dtype=EventCounts)):
     """Reads: the boxes' half-sizes, the prefix ends. Writes: each pixel's table slot (boxes without a prefix end: the slot past
     the table, sorted last and never visited) and its pixel index, the sort's input."""
     pixel = wp.tid() + offset
@@ -243,13 +243,13 @@ def grid_keys_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search
         slot = grid_slot(search, grid_cell(search, box_center(scene, prefix_gb, pixel)))
     keys[pixel] = slot
     ids[pixel] = pixel
-    events[pixel] = ray_events(0)
+    events[pixel] = packed_events(ray_events(0))
 
 
 @wp.kernel(module=KERNEL_MODULE)
 def grid_order_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search: SearchStructure, count: int,
                       entries: wp.array(dtype=GridEntry), ranges: wp.array(dtype=wp.vec2i),
-                      events: wp.array(dtype=wp.vec4i)):
+                      events: wp.array(dtype=EventCounts)):
     """Reads: the sorted slots and pixels, the boxes' half-sizes, the prefix ends. Writes: the entries in sorted order,
     and where a slot's run begins or ends, that bound of its range (the table was zeroed before:
     empty slots keep the empty range)."""
@@ -267,4 +267,4 @@ def grid_order_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, searc
             ranges[slot][0] = i
         if i == count - 1 or search.keys[i + 1] != slot:
             ranges[slot][1] = i + 1
-    events[i] = ray_events(0)
+    events[i] = packed_events(ray_events(0))

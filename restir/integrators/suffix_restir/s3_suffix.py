@@ -24,7 +24,7 @@ from ...device.rng import hash_combine, rng_key, rng_uniform
 from ...device.scene_device import SceneDevice
 from ...device.streams import PT_TEMPORAL_DIMS_PER_SAMPLE, STAGE_SR_SUFFIX, STAGE_SR_SUFFIX_RIS, STAGE_SR_SUFFIX_TEMPORAL
 from ...resampling.ris import cap_history, ris_finalize, ris_init
-from ..common.events import stage_events
+from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import load_shading
@@ -85,7 +85,7 @@ def make_suffix_kernel(mutation: str = "none"):
                       gb: GBuffer, prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                       prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
                       prev_reservoirs: wp.array(dtype=PathReservoir), reservoirs: wp.array(dtype=PathReservoir),
-                      shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                      shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         dc = load_domain(scene, params, prefixes, prefix_gb, pixel)
         fresh = new_suffix(scene, params, dc, pixel)
@@ -100,8 +100,8 @@ def make_suffix_kernel(mutation: str = "none"):
                 c.F = c.F * prefixes[pixel].p_hat
                 c.W = c.W / prefixes[pixel].p_hat
         reservoirs[pixel] = c
-        shifts[pixel] = wp.vec4i(0)
-        events[pixel] = stage_events(fresh.s.s, 0, fresh.s.rays)
+        shifts[pixel] = packed_counts(wp.vec4i(0))
+        events[pixel] = packed_events(stage_events(fresh.s.s, 0, fresh.s.rays))
         if temporal == 0 or dc.sh.valid == 0:
             return
         # ---- temporal reuse of the previous frame's final suffix of the pixel that saw this hit
@@ -117,10 +117,10 @@ def make_suffix_kernel(mutation: str = "none"):
         key = rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_SUFFIX_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.pt.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
         st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
-        shifts[pixel] = st.tl.counts
+        shifts[pixel] = packed_counts(st.tl.counts)
         reservoirs[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
         ev = stage_events(st.s, st.tl.failed, st.tl.rays)
-        events[pixel] = ev + wp.vec4i(fresh.s.s.nonfinite, fresh.s.s.zero, 0, fresh.s.rays)
+        events[pixel] = packed_events(ev + wp.vec4i(fresh.s.s.nonfinite, fresh.s.s.zero, 0, fresh.s.rays))
 
     return suffix_kernel
 

@@ -14,7 +14,7 @@ from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, 
                                DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_SR_SUFFIX_SPATIAL)
 from ...resampling.mis import pairwise_normalization
 from ...resampling.ris import ris_finalize
-from ..common.events import stage_events
+from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
 from ..path_reuse.path_sample import PathReservoir, store
@@ -32,11 +32,11 @@ def make_suffix_spatial_kernel(shift=shift_path, module=None):
     def suffix_spatial_kernel(offset: int, scene: SceneDevice, params: SRParams, width: int, height: int,
                               prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                               reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                              shifts: wp.array(dtype=wp.vec4i), events: wp.array(dtype=wp.vec4i)):
+                              shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         c = reservoirs_in[pixel]
-        events[pixel] = wp.vec4i(0)
-        shifts[pixel] = wp.vec4i(0)
+        events[pixel] = packed_events(wp.vec4i(0))
+        shifts[pixel] = packed_counts(wp.vec4i(0))
         dc = load_domain(scene, params, prefixes, prefix_gb, pixel)
         if dc.sh.valid == 0:
             reservoirs_out[pixel] = c
@@ -58,8 +58,8 @@ def make_suffix_spatial_kernel(shift=shift_path, module=None):
                               rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
         st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))
-        events[pixel] = stage_events(st.s, st.tl.failed, st.tl.rays)
-        shifts[pixel] = st.tl.counts
+        events[pixel] = packed_events(stage_events(st.s, st.tl.failed, st.tl.rays))
+        shifts[pixel] = packed_counts(st.tl.counts)
 
     return suffix_spatial_kernel
 

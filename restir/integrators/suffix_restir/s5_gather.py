@@ -27,7 +27,7 @@ from ...device.scene_device import SceneDevice
 from ...device.streams import (SR_FALLBACK_DIMS_PER_PREFIX, SR_MAX_GATHER_PREFIXES, STAGE_SR_GATHER_FALLBACK,
                                STAGE_SR_GATHER_PREFIX, STAGE_SR_GATHER_RIS, STAGE_SR_GATHER_SUFFIX)
 from ...resampling.ris import cap_history, ris_finalize, ris_init
-from ..common.events import output_events
+from ..common.events import EventCounts, PassCounts, output_events, packed_counts, packed_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import spatial_neighbor
 from ..common.shading import load_shading
@@ -167,8 +167,8 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
                       prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                       suffixes: wp.array(dtype=PathReservoir), width: int, height: int, direct: wp.array(dtype=wp.vec3),
                       primary_weight: wp.array(dtype=float), sample_L: wp.array(dtype=wp.vec3),
-                      slot_counts: wp.array(dtype=wp.vec4i), shifts: wp.array(dtype=wp.vec4i),
-                      events: wp.array(dtype=wp.vec4i)):
+                      slot_counts: wp.array(dtype=PassCounts), shifts: wp.array(dtype=PassCounts),
+                      events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         L = direct[pixel]
         tl = ShiftTally()
@@ -224,9 +224,9 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
                 total += wp.cw_mul(pf.thp, S)
             L += total * (primary_weight[pixel] / float(N))
         sample_L[pixel] = L
-        slot_counts[pixel] = filled
-        shifts[pixel] = tl.counts
-        events[pixel] = output_events(L, tl.rays)
+        slot_counts[pixel] = packed_counts(filled)
+        shifts[pixel] = packed_counts(tl.counts)
+        events[pixel] = packed_events(output_events(L, tl.rays))
 
     return SimpleNamespace(kernel=gather_kernel, neighbor_term=neighbor_term, canonical_weight=canonical_weight,
                            is_technique=is_technique)
