@@ -167,7 +167,10 @@ MATRIX_REFERENCE_SPP = {"veach-mis": 48}
 # means are heavy-tailed (light through the blinds is found by BSDF sampling only; excess kurtosis
 # about 6): at 64 x 8 one tile read z = 5.45 (crit 4.93) while the image passed (z -0.5), and two
 # replicates with fresh seeds passed (max tile |z| 2.04 and 2.31; VALIDATION.md).
-MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
+MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128,
+               # direct=pt (ReSTIR PT's default since 2026-12-06) in the room: MDB 7.3% at 64 runs, 5.0% at 128
+               **{("indirect-room", c): 128 for c in ("C4-defaults", "C4-orbit", "C4-dolly", "C4-centre")},
+               ("masks", "C4-official"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
                ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128}
 
 

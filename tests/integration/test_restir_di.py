@@ -355,7 +355,7 @@ def test_fused_initial_and_temporal_is_the_split_pipeline_bit_for_bit(settings, 
                                   max_depth=None if method == "restir-di" else 4, camera_motion=motion)
         return restir.render(scene, cfg)
 
-    for method, key, extra in (("restir-di", "stages.split", settings), ("restir-pt", "di.stages.split", {})):
+    for method, key, extra in (("restir-di", "stages.split", settings), ("restir-pt", "di.stages.split", {"direct": "restir-di"})):
         fused, split = run(method, key, False, extra), run(method, key, True, extra)
         assert np.array_equal(fused.image, split.image), method
         assert fused.stats["counters"] == split.stats["counters"]

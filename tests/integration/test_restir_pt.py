@@ -44,11 +44,12 @@ def check_sphere(settings, max_depth=4, k=32, frames=16, bound=0.015, allow_muta
     return r
 
 
-# (settings over the defaults: hybrid shift, direct light from ReSTIR DI, temporal + 1 spatial round)
+# (settings over the defaults: hybrid shift, direct light in the path reservoirs (direct=pt),
+# temporal reuse with cap 5 + 1 spatial round)
 SLOW = pytest.mark.slow  # kept out of the fast tier for its time budget (covered again by the slow matrix)
 SPHERE = {
     "defaults": {},
-    "direct-pt": {"direct": "pt"},
+    "direct-restir-di": {"direct": "restir-di"},  # the ReSTIR DI component gives the direct light
     "canonical-1": {"temporal": False, "spatial.rounds": 0},
     "canonical-4": ({"temporal": False, "spatial.rounds": 0, "candidates": 4}, SLOW),
     "reconnection": {"shift": "reconnection", "direct": "pt"},
@@ -144,7 +145,7 @@ def test_dropping_failed_shifts_is_caught():
 # has one value everywhere, so its mutations barely move anything; these two scenes have colour,
 # glossy lobes and 40-75% accepted proposals.
 MCMC_SCENES = ["builtin:cornell-box-glossy", "builtin:indirect-room"]
-MCMC_BASES = {"defaults": {}, "direct-pt": {"direct": "pt"},
+MCMC_BASES = {"defaults": {}, "direct-restir-di": {"direct": "restir-di"},
               "spatial-k8-rounds-2": {"direct": "pt", "temporal": False, "spatial.neighbors": 8, "spatial.rounds": 2}}
 
 
@@ -157,7 +158,7 @@ def mcmc_paired(scene_spec, base, extra, allow_mutation=False):
 
 
 @pytest.mark.parametrize("start", ["z", "rc_prev"])
-@pytest.mark.parametrize("base", [pytest.param(k, marks=SLOW) if k == "direct-pt" else k for k in MCMC_BASES])
+@pytest.mark.parametrize("base", [pytest.param(k, marks=SLOW) if k == "direct-restir-di" else k for k in MCMC_BASES])
 @pytest.mark.parametrize("scene", MCMC_SCENES)
 def test_mcmc_mutations_change_nothing_on_average(scene, base, start):
     rep = mcmc_paired(scene, MCMC_BASES[base], {"mcmc.steps": 2, "mcmc.start": start})
@@ -178,7 +179,7 @@ def test_harness_refuses_mutations():
         runs(sphere(), {"debug.mutation": "bsdf_twice"}, 2, 1, 4)
 
 
-@pytest.mark.parametrize("settings", [{}, {"mcmc.steps": 1, "spatial.rounds": 2, "direct": "pt"}])
+@pytest.mark.parametrize("settings", [{}, {"direct": "restir-di"}, {"mcmc.steps": 1, "spatial.rounds": 2}])
 def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
     """The shipped pipeline runs trace + initial RIS and temporal reuse as one kernel, and every
     pass after it writes into the history's buffer; stages.split runs the two stages apart with a
@@ -205,11 +206,11 @@ def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
 
 def test_memory_per_pixel():
     """Issue 22's memory target, 256 B per pixel with the film's accumulation not counted, met by
-    direct=pt (direct light in the path reservoirs: 252 B); with the ReSTIR DI component (the
-    default) 312 B. The registry counts every buffer a method allocates, so a buffer added
+    the defaults (direct=pt: direct light in the path reservoirs, 252 B); with the ReSTIR DI
+    component (direct=restir-di) 312 B. The registry counts every buffer a method allocates, so a buffer added
     anywhere moves these numbers."""
     scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
-    for settings, expected in (({"direct": "pt"}, 252), ({"direct": "restir-di"}, 312)):
+    for settings, expected in (({}, 252), ({"direct": "restir-di"}, 312)):
         res = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=2, settings=settings))
         bpp = res.stats["bytes_per_pixel"]
         assert bpp["total"] - bpp["film_mean"] - bpp["film_m2"] == expected, bpp

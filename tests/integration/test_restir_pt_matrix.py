@@ -23,35 +23,40 @@ from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
 TEMPORAL = {"spatial.rounds": 0}
+# The defaults until 2026-12-06 (the official ones): every cell but the defaults' own keeps them,
+# so the verdicts in VALIDATION.md stay those of the configuration each cell ran.
+OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0}
 
 MATRIX = {
-    "C1-candidates-1": ({**NO_REUSE}, "none"),
-    "C1-candidates-4": ({**NO_REUSE, "candidates": 4}, "none"),
-    **{f"C3-{shift}-k{k}": ({**SPATIAL, "shift": shift, "spatial.neighbors": k}, "none")
+    "C1-candidates-1": ({**OFFICIAL, **NO_REUSE}, "none"),
+    "C1-candidates-4": ({**OFFICIAL, **NO_REUSE, "candidates": 4}, "none"),
+    **{f"C3-{shift}-k{k}": ({**OFFICIAL, **SPATIAL, "shift": shift, "spatial.neighbors": k}, "none")
        for shift in ("hybrid", "reconnection", "replay") for k in (1, 3, 8)},
-    **{f"C3-{shift}-k3-rounds-{r}": ({**SPATIAL, "shift": shift, "spatial.rounds": r}, "none")
+    **{f"C3-{shift}-k3-rounds-{r}": ({**OFFICIAL, **SPATIAL, "shift": shift, "spatial.rounds": r}, "none")
        for shift in ("hybrid", "reconnection", "replay") for r in (2, 3)},
-    "C2-cap-1": ({**TEMPORAL, "temporal.cap": 1.0}, "none"),
-    "C2-cap-20": ({**TEMPORAL, "temporal.cap": 20.0}, "none"),
-    "C2-no-cap": ({**TEMPORAL, "temporal.cap": 0.0}, "none"),
+    "C2-cap-1": ({**OFFICIAL, **TEMPORAL, "temporal.cap": 1.0}, "none"),
+    "C2-cap-20": ({**OFFICIAL, **TEMPORAL, "temporal.cap": 20.0}, "none"),
+    "C2-no-cap": ({**OFFICIAL, **TEMPORAL, "temporal.cap": 0.0}, "none"),
+    # the defaults (direct=pt, temporal.cap=5, since 2026-12-06) with every stage on, still and moving
     "C4-defaults": ({}, "none"),
-    "C4-cap-5": ({"temporal.cap": 5.0}, "none"),  # the cap the denoised equal-time measurement favours (BENCHMARKS.md)
-    "C4-direct-pt": ({"direct": "pt"}, "none"),
-    "C4-k8-rounds-2": ({"spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     "C4-orbit": ({}, "orbit"),
     "C4-dolly": ({}, "dolly"),
     "C4-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
+    "C4-official": ({**OFFICIAL}, "none"),  # the defaults until 2026-12-06 (cell C4-defaults then)
+    "C4-cap-5": ({**OFFICIAL, "temporal.cap": 5.0}, "none"),
+    "C4-direct-pt": ({**OFFICIAL, "direct": "pt"}, "none"),
+    "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
-    "C6-mcmc-z": ({"mcmc.steps": 2}, "none"),
-    "C6-mcmc-rc-prev": ({"mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),
-    "C6-mcmc-rc-prev-spatial": ({**SPATIAL, "mcmc.steps": 4, "mcmc.start": "rc_prev"}, "none"),
-    "C6-mcmc-orbit": ({"mcmc.steps": 1, "mcmc.start": "rc_prev"}, "orbit"),
+    "C6-mcmc-z": ({**OFFICIAL, "mcmc.steps": 2}, "none"),
+    "C6-mcmc-rc-prev": ({**OFFICIAL, "mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),
+    "C6-mcmc-rc-prev-spatial": ({**OFFICIAL, **SPATIAL, "mcmc.steps": 4, "mcmc.start": "rc_prev"}, "none"),
+    "C6-mcmc-orbit": ({**OFFICIAL, "mcmc.steps": 1, "mcmc.start": "rc_prev"}, "orbit"),
 }
 
 
 # on the bump-map and the mask scenes (shifts across tilted frames and null lobes): every shift, spatial rounds, temporal reuse, the defaults and a moving camera
 BUMP_CELLS = ["C1-candidates-1", "C3-hybrid-k3", "C3-reconnection-k3", "C3-replay-k3", "C3-hybrid-k3-rounds-2",
-              "C2-cap-20", "C4-defaults", "C4-orbit"]
+              "C2-cap-20", "C4-defaults", "C4-orbit", "C4-official"]
 
 
 @pytest.mark.slow
