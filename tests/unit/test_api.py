@@ -100,7 +100,8 @@ def test_rays_are_counted_per_stage_with_the_direct_light_component():
     """stats["rays"] is the sum of stats["rays_by_stage"], and a method with ReSTIR DI for direct
     light counts the component's rays (its stages "di.*") among its own."""
     scene = restir.load_scene("builtin:cornell-box", width=16, height=16)
-    r = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=1, frames=1, max_depth=3))
+    r = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=1, frames=1, max_depth=3,
+                                                 settings={"direct": "restir-di"}))
     by_stage = r.stats["rays_by_stage"]
     assert sum(by_stage.values()) == r.stats["rays"]
     assert by_stage["gbuffer"] == 16 * 16  # one primary ray per pixel
