@@ -23,7 +23,7 @@ from ..settings import Settings
 from ..timing import BufferRegistry, StageTimer
 from .common.events import COUNTER_NAMES, EV_RAYS, EV_SATURATED, EventCounts
 from .common.mutations import Mutations
-from .common.tally import EventTally, tally_counts_kernel, tally_events_kernel
+from .common.tally import TALLY_KERNELS, EventTally
 
 
 COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
@@ -81,7 +81,7 @@ class Integrator:
             timer.daemon = True
             timer.start()
         try:
-            for k in (*self.kernels(), tally_events_kernel, tally_counts_kernel, film_add_kernel):
+            for k in (*self.kernels(), *TALLY_KERNELS.values(), film_add_kernel):
                 wp.load_module(k.module, device=self.device)
         finally:
             if timer is not None:

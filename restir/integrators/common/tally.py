@@ -7,6 +7,8 @@ stage), but only into a small device array: no stage waits for the host. Each th
 adds a chunk of pixels in int64 and then adds its chunk's totals atomically, so a GPU's atomics
 meet in one address per chunk, not per pixel. A fifth sum counts the fields that saturated.
 """
+from typing import Any
+
 import numpy as np
 import warp as wp
 
@@ -17,44 +19,55 @@ SUMS = 5  # four counts and the saturated fields
 
 
 @wp.func
-def add_chunk(sums: wp.array2d(dtype=wp.int64), slot: int, a: wp.vec4l, saturated: wp.int64):
+def unpacked(e: EventCounts) -> wp.vec4i:
+    """A stage's counts in events.py's order: non-finite, zero-weight inputs, failed shifts, rays."""
+    c = wp.vec4i(0, 0, 0, int(e[0]))
+    for j in range(3):
+        c[j] = int((e[1] >> wp.uint32(COUNT_BITS * j)) & wp.uint32(COUNT_MAX))
+    return c
+
+
+@wp.func
+def saturated(e: EventCounts) -> int:
+    n = int(0)
+    for j in range(3):
+        if int((e[1] >> wp.uint32(COUNT_BITS * j)) & wp.uint32(COUNT_MAX)) == COUNT_MAX:
+            n += 1
+    return n
+
+
+@wp.func
+def unpacked(e: PassCounts) -> wp.vec4i:
+    return wp.vec4i(int(e[0]), int(e[1]), int(e[2]), int(e[3]))
+
+
+@wp.func
+def saturated(e: PassCounts) -> int:
+    n = int(0)
+    for j in range(4):
+        if int(e[j]) == PASS_COUNT_MAX:
+            n += 1
+    return n
+
+
+@wp.kernel
+def tally_kernel(counts: wp.array(dtype=Any), n: int, slot: int, sums: wp.array2d(dtype=wp.int64)):
+    t = wp.tid()
+    a = wp.vec4l()
+    sat = wp.int64(0)
+    for i in range(t * CHUNK, wp.min(t * CHUNK + CHUNK, n)):
+        c = unpacked(counts[i])
+        for j in range(4):
+            a[j] += wp.int64(c[j])
+        sat += wp.int64(saturated(counts[i]))
     for j in range(4):
         if a[j] != wp.int64(0):
             wp.atomic_add(sums, slot, j, a[j])
-    if saturated != wp.int64(0):
-        wp.atomic_add(sums, slot, 4, saturated)
+    if sat != wp.int64(0):
+        wp.atomic_add(sums, slot, 4, sat)
 
 
-@wp.kernel
-def tally_events_kernel(events: wp.array(dtype=EventCounts), n: int, slot: int, sums: wp.array2d(dtype=wp.int64)):
-    """Sums in events.py's order: non-finite, zero-weight inputs, failed shifts, rays."""
-    t = wp.tid()
-    a = wp.vec4l()
-    saturated = wp.int64(0)
-    for i in range(t * CHUNK, wp.min(t * CHUNK + CHUNK, n)):
-        e = events[i]
-        for j in range(3):
-            c = int((e[1] >> wp.uint32(COUNT_BITS * j)) & wp.uint32(COUNT_MAX))
-            a[j] += wp.int64(c)
-            if c == COUNT_MAX:
-                saturated += wp.int64(1)
-        a[3] += wp.int64(e[0])
-    add_chunk(sums, slot, a, saturated)
-
-
-@wp.kernel
-def tally_counts_kernel(counts: wp.array(dtype=PassCounts), n: int, slot: int, sums: wp.array2d(dtype=wp.int64)):
-    t = wp.tid()
-    a = wp.vec4l()
-    saturated = wp.int64(0)
-    for i in range(t * CHUNK, wp.min(t * CHUNK + CHUNK, n)):
-        e = counts[i]
-        for j in range(4):
-            c = int(e[j])
-            a[j] += wp.int64(c)
-            if c == PASS_COUNT_MAX:
-                saturated += wp.int64(1)
-    add_chunk(sums, slot, a, saturated)
+TALLY_KERNELS = {t: wp.overload(tally_kernel, {"counts": wp.array(dtype=t)}) for t in (EventCounts, PassCounts)}
 
 
 class EventTally:
@@ -76,8 +89,7 @@ class EventTally:
         if slot >= self.CAPACITY:
             raise RuntimeError(f"more than {self.CAPACITY} event keys in one integrator")
         n = events.shape[0] if n is None else n
-        kernel = tally_events_kernel if events.dtype == EventCounts else tally_counts_kernel
-        wp.launch(kernel, dim=(n + CHUNK - 1) // CHUNK, inputs=[events, n, slot, self.sums], device=self.device)
+        wp.launch(TALLY_KERNELS[events.dtype], dim=(n + CHUNK - 1) // CHUNK, inputs=[events, n, slot, self.sums], device=self.device)
         self.pending = True
 
     def read(self) -> dict:
