@@ -27,8 +27,10 @@ browser:
 		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 		$$SUDO apt-get update -q && $$SUDO apt-get install -y -q chromium chromium-driver; }
 
+# One pytest worker per core (pytest-xdist), each test file on one worker: a worker compiles
+# kernels (single-threaded) while the other runs tests; Warp's kernel cache is safe to share.
 test: $(STAMP) browser
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q -n auto --dist loadfile
 
 test-slow: $(STAMP) browser
 	$(VENV)/bin/pytest -q -m slow
