@@ -96,7 +96,8 @@ def main():
                   f"{x['relmse_denoised_frame']:.3g} | {factor_text(hd.get('raw_frame')) if hd else ''} | "
                   f"{factor_text(hd.get('denoised_frame')) if hd else ''} | {x['correlation_factor']['8']:.2f} | "
                   + " | ".join("n/a" if radial[r_] is None else f"{radial[r_]:.3f}" for r_ in (1, 4, 8, 16))
-                  + f" | {x['temporal_correlation']:.3f} | {x['relmse_accumulated']:.3g} |", flush=True)
+                  + " | " + ("n/a" if x["temporal_correlation"] is None else f"{x['temporal_correlation']:.3f}")
+                  + f" | {x['relmse_accumulated']:.3g} |", flush=True)  # n/a: fewer than two measured frames
         os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
         with open(args.out, "w") as f:
             json.dump({"args": vars(args), "rows": rows}, f, indent=2)
