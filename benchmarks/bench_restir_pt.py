@@ -177,7 +177,7 @@ def phase_di(args, out):
             continue
         et = EqualTime(args, spec())
         for cand, rounds in DI_GRID:
-            r = et.compare({"di.candidates": cand, "di.spatial.rounds": rounds})
+            r = et.compare({"direct": "restir-di", "di.candidates": cand, "di.spatial.rounds": rounds})
             report(name, args, r, f", DI {cand} candidates, {rounds} spatial rounds")
             out[f"{name} di {cand}x{rounds}"] = r
 

@@ -37,6 +37,17 @@ def test_overrides_are_parsed_and_checked():
         S.from_overrides({"candidates": "four"})
 
 
+@pytest.mark.parametrize("method", ["restir-pt", "suffix-restir"])
+def test_di_settings_without_the_di_component_are_refused(method):
+    """With direct=pt (ReSTIR PT's default) nothing reads the di.* settings: a changed one is
+    refused, not ignored; with direct=restir-di, or at their defaults, they are accepted."""
+    cls = METHODS[method]
+    with pytest.raises(ConfigError, match="di.candidates set with direct=pt"):
+        cls.check_settings(cls.Settings.from_overrides({"direct": "pt", "di.candidates": "16"}))
+    cls.check_settings(cls.Settings.from_overrides({"direct": "restir-di", "di.candidates": "16"}))
+    cls.check_settings(cls.Settings.from_overrides({"direct": "pt", "di.candidates": str(cls.Settings().di.candidates)}))
+
+
 def test_the_api_gives_the_integrator_typed_settings():
     import restir
     from restir.api import make_integrator

@@ -29,9 +29,10 @@ def unpacked(e: EventCounts) -> wp.vec4i:
 
 @wp.func
 def saturated(e: EventCounts) -> int:
+    c = unpacked(e)
     n = int(0)
-    for j in range(3):
-        if int((e[1] >> wp.uint32(COUNT_BITS * j)) & wp.uint32(COUNT_MAX)) == COUNT_MAX:
+    for j in range(3):  # the rays have 32 bits
+        if c[j] == COUNT_MAX:
             n += 1
     return n
 
@@ -89,7 +90,8 @@ class EventTally:
         if slot >= self.CAPACITY:
             raise RuntimeError(f"more than {self.CAPACITY} event keys in one integrator")
         n = events.shape[0] if n is None else n
-        wp.launch(TALLY_KERNELS[events.dtype], dim=(n + CHUNK - 1) // CHUNK, inputs=[events, n, slot, self.sums], device=self.device)
+        wp.launch(TALLY_KERNELS[events.dtype], dim=(n + CHUNK - 1) // CHUNK, inputs=[events, n, slot, self.sums],
+                  device=self.device)
         self.pending = True
 
     def read(self) -> dict:

@@ -37,7 +37,17 @@ def di_settings(settings) -> DISettings:
     return dataclasses.replace(copy.deepcopy(settings.di), **render, debug_mutation="none")
 
 
-def check_di_settings(settings: dict) -> None:
+def check_di_settings(settings) -> None:
+    """The component's settings, as ReSTIR DI checks its own. With direct=pt there is no
+    component, so a di.* setting changed from its default would be ignored: refused instead."""
+    from ...config import ConfigError
+
+    if settings.direct != "restir-di":
+        changed = [key for key, _, default, _, _ in type(settings).entries()
+                   if key.startswith("di.") and settings.get(key) != default]
+        if changed:
+            raise ConfigError(f"{', '.join(changed)} set with direct={settings.direct}, which takes no direct light "
+                              "from ReSTIR DI: add direct=restir-di, or leave the di.* settings at their defaults")
     ReSTIRDI.check_settings(di_settings(settings))
 
 
