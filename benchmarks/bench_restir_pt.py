@@ -93,6 +93,8 @@ def phase_fused(args, out):
         split = {**settings, "stages.split": True, **({"di.stages.split": True} if args.direct == "restir-di" else {})}
         sides = {"fused": ("restir-pt", settings), "split": ("restir-pt", split),
                  "pt": ("pt", {})}
+        if args.variant:  # a third ReSTIR PT side, the fused one with these settings changed
+            sides["variant"] = ("restir-pt", {**settings, **json.loads(args.variant)})
         for method, st in sides.values():
             render(scene, method, 1, settings=st, **common)  # compile, warm up
         ms = {k: [] for k in sides}
@@ -104,14 +106,18 @@ def phase_fused(args, out):
         ratios = {"fused/pt": [a / b for a, b in zip(ms["fused"], ms["pt"])],
                   "split/pt": [a / b for a, b in zip(ms["split"], ms["pt"])],
                   "fused/split": [a / b for a, b in zip(ms["fused"], ms["split"])]}
+        restir_sides = [k for k in sides if k != "pt"]
+        if "variant" in sides:
+            ratios["variant/pt"] = [a / b for a, b in zip(ms["variant"], ms["pt"])]
+            ratios["variant/fused"] = [a / b for a, b in zip(ms["variant"], ms["fused"])]
         stages = {k: {n: v["total_ms"] / args.frames for n, v in last[k].stats["stages"].items() if v["total_ms"]}
-                  for k in ("fused", "split")}
-        bpp = {k: last[k].stats["bytes_per_pixel"] for k in ("fused", "split")}
+                  for k in restir_sides}
+        bpp = {k: last[k].stats["bytes_per_pixel"] for k in restir_sides}
         print(f"\n{name} 512x512 max_depth {args.max_depth}, direct={args.direct}: ms per frame "
               + "; ".join(f"{k} " + ", ".join(f"{x:.0f}" for x in v) for k, v in ms.items()))
         for k, v in ratios.items():
             print(f"  {k}: " + ", ".join(f"{x:.3f}" for x in v))
-        for k in ("fused", "split"):
+        for k in restir_sides:
             print(f"  {k} stages: " + "  ".join(f"{n} {v:.0f}" for n, v in stages[k].items()))
             print(f"  {k} bytes per pixel {bpp[k]['total']:.0f}")
         out[f"fused-{name}-{args.direct}"] = {"frame_ms": ms, "ratios": ratios, "stages_ms": stages,
@@ -211,6 +217,7 @@ def main():
     ap.add_argument("--scenes", nargs="+", default=["indirect-room", "veach-bidir", "cornell-box-glossy"])
     ap.add_argument("--repeats", type=int, default=3, help="alternating rounds of the fused phase")
     ap.add_argument("--direct", default="restir-di", help="ReSTIR PT's direct setting in the fused phase")
+    ap.add_argument("--variant", help="the fused phase's third ReSTIR PT side: these settings (JSON) changed")
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}

@@ -32,6 +32,7 @@ STAGE_SR_GATHER_SUFFIX = wp.constant(56)    # the final gather's canonical suffi
 STAGE_SR_GATHER_RIS = wp.constant(57)       # its streaming-RIS selections
 STAGE_SR_GATHER_FALLBACK = wp.constant(58)  # gather slots the search left empty: random screen neighbours
 STAGE_SR_SUFFIX_SPATIAL = wp.constant(60)   # + round index, round < MAX_SPATIAL_ROUNDS
+STAGE_PT_SPATIAL_PAIRING = wp.constant(70)  # + round index: ReSTIR PT's reciprocal pairings (one stream a frame)
 STAGE_PATH_NEE = wp.constant(256)  # + j: the path tracer's j-th extra light sample per vertex (0 < j < 256)
 
 MAX_SPATIAL_ROUNDS = 8
@@ -60,6 +61,7 @@ STAGE_RANGES = (
     ("sr_gather_ris", STAGE_SR_GATHER_RIS, 1),
     ("sr_gather_fallback", STAGE_SR_GATHER_FALLBACK, 1),
     ("sr_suffix_spatial", STAGE_SR_SUFFIX_SPATIAL, MAX_SPATIAL_ROUNDS),
+    ("pt_spatial_pairing", STAGE_PT_SPATIAL_PAIRING, MAX_SPATIAL_ROUNDS),
     ("path_nee", STAGE_PATH_NEE + 1, MAX_NEE_SAMPLES - 1),
 )
 
@@ -102,6 +104,14 @@ DI_SPATIAL_DIMS_PER_NEIGHBOR = wp.constant(4)
 DI_SPATIAL_DIM_OFFSET = wp.constant(0)
 DI_SPATIAL_DIM_SELECT = wp.constant(2)
 DI_SPATIAL_DIM_CANONICAL = wp.constant(255)
+# reciprocal spatial reuse (ReSTIR PT's spatial.reciprocal): neighbour j's pairing is drawn once a
+# frame from the pairing stream (pixel 0) at s * DI_SPATIAL_DIMS_PER_SAMPLE + j *
+# DI_SPATIAL_DIMS_PER_NEIGHBOR + {0-1: the XOR mask, 2-3: the grid's shift}; in each pixel's own
+# stream the pair's selection is DI_SPATIAL_DIM_SELECT and the canonical input's share of the pair
+# DI_SPATIAL_DIM_SHARE (the disk offset's dimensions are not drawn in this mode)
+PAIRING_DIM_MASK = wp.constant(0)
+PAIRING_DIM_SHIFT = wp.constant(2)
+DI_SPATIAL_DIM_SHARE = wp.constant(3)
 DI_MAX_NEIGHBORS = 32
 
 # ----------------------------------------------------------------------------- ReSTIR PT
@@ -164,7 +174,11 @@ DIM_LAYOUTS = (
                                                (DIM_BSDF_DIR, 2))]),
     ("pt_spatial", DI_SPATIAL_DIMS_PER_SAMPLE,
      [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, n) for j in range(PT_MAX_NEIGHBORS)
-      for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1))] + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
+      for o, n in ((DI_SPATIAL_DIM_OFFSET, 2), (DI_SPATIAL_DIM_SELECT, 1), (DI_SPATIAL_DIM_SHARE, 1))]
+     + [(DI_SPATIAL_DIM_CANONICAL, 1)]),
+    ("pt_spatial_pairing", DI_SPATIAL_DIMS_PER_SAMPLE,
+     [(j * DI_SPATIAL_DIMS_PER_NEIGHBOR + o, 2) for j in range(PT_MAX_NEIGHBORS)
+      for o in (PAIRING_DIM_MASK, PAIRING_DIM_SHIFT)]),
     ("sr_prefix_temporal", SR_PREFIX_TEMPORAL_DIMS_PER_SAMPLE, [(0, 1), (1, 1)]),
     ("sr_gather_fallback", SR_MAX_GATHER_PREFIXES * SR_FALLBACK_DIMS_PER_PREFIX,
      [(i * SR_FALLBACK_DIMS_PER_PREFIX + 2 * m, 2) for i in range(SR_MAX_GATHER_PREFIXES)

@@ -182,20 +182,28 @@ class Integrator:
         """Rays traced so far, over every stage (a component's too: it shares stage_rays)."""
         return sum(self.stage_rays.values())
 
-    def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False) -> None:
+    def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False,
+                   parts: int | None = None, after_part=None) -> None:
         """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a
         scratch buffer `self.pass_out`): reads this sample's reservoirs, writes `pass_out`, then
         the two swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass
         wrote. A method whose history is read before its first pass (its first kernel resamples
         the new reservoirs with the history, fused) has no scratch buffer (`pass_out` None): the
         pass writes into the history's buffer, and the buffer it read becomes the history's.
-        in_place: the race mutant, which writes the buffer it reads."""
+        in_place: the race mutant, which writes the buffer it reads. parts: a pass made of that many
+        launches, the part's index the kernel's first input (each launch reads the same input and
+        carries its state on in the outputs; `after_part()` runs after each, for its counts)."""
         history_free = self.pass_out is None
         if history_free:
             self.pass_out = self.reservoirs.previous
         current = self.reservoirs.current
         out = current if in_place else self.pass_out
-        self.run_stage(stage, kernel, [*inputs, current], [out, *extra_outputs])
+        if parts is None:
+            self.run_stage(stage, kernel, [*inputs, current], [out, *extra_outputs])
+        else:
+            for j in range(parts):
+                self.run_stage(stage, kernel, [j, *inputs, current], [out, *extra_outputs], new_call=j == 0)
+                after_part()
         if not in_place:
             self.reservoirs.current, self.pass_out = self.pass_out, current
         if history_free:

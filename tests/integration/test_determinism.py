@@ -137,19 +137,21 @@ def test_in_place_spatial_output_is_caught():
     assert not np.array_equal(forward, render_di(7, "spatial_in_place", reverse=True))
 
 
-def render_pt(slices, mutation="none", reverse=False):
+def render_pt(slices, mutation="none", reverse=False, reciprocal=False):
     scene = restir.load_scene("builtin:indirect-room", width=24, height=20)
     cfg = restir.RenderConfig(method="restir-pt", spp=2, frames=2, seed=3, slices=slices, debug_reverse_launch=reverse,
                               max_depth=4, settings={"spatial.rounds": 2, "spatial.neighbors": 4,
-                                                     "debug.mutation": mutation})
+                                                     "spatial.reciprocal": reciprocal, "debug.mutation": mutation})
     return restir.render(scene, cfg).image
 
 
+@pytest.mark.parametrize("reciprocal", [False, True])
 @pytest.mark.parametrize("slices", [1, 7, 480])
-def test_restir_pt_is_independent_of_slicing(slices):
-    """R2 for ReSTIR PT (its DI component included): ping-pong everywhere."""
-    assert np.array_equal(render_pt(2), render_pt(slices))
-    assert np.array_equal(render_pt(2), render_pt(slices, reverse=True))
+def test_restir_pt_is_independent_of_slicing(slices, reciprocal):
+    """R2 for ReSTIR PT (its DI component included): ping-pong everywhere. The reciprocal spatial
+    pass writes two pixels per thread (a pair's), and no pixel that another thread of the launch reads or writes."""
+    assert np.array_equal(render_pt(2, reciprocal=reciprocal), render_pt(slices, reciprocal=reciprocal))
+    assert np.array_equal(render_pt(2, reciprocal=reciprocal), render_pt(slices, reverse=True, reciprocal=reciprocal))
 
 
 def test_restir_pt_in_place_spatial_output_is_caught():

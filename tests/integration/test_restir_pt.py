@@ -55,6 +55,9 @@ SPHERE = {
     "reconnection": {"shift": "reconnection", "direct": "pt"},
     "replay": {"shift": "replay", "direct": "pt"},
     "spatial-k8-rounds-3": {"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3},
+    "reciprocal": {"spatial.reciprocal": True},
+    "reciprocal-k8-rounds-3": {"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3,
+                               "spatial.reciprocal": True},
     "temporal-no-cap": ({"temporal.cap": 0.0, "spatial.rounds": 0}, SLOW),
     "mcmc-z": {"mcmc.steps": 2},
     "mcmc-rc-prev": {"mcmc.steps": 2, "mcmc.start": "rc_prev"},
@@ -127,11 +130,12 @@ def test_estimator_mutations_are_caught_on_the_sphere(mutation):
         check_sphere({"debug.mutation": mutation, "direct": "pt"}, allow_mutation=True)
 
 
-def test_dropping_failed_shifts_is_caught():
+@pytest.mark.parametrize("reciprocal", [False, True])
+def test_dropping_failed_shifts_is_caught(reciprocal):
     """Neighbours whose shift failed left out of V and of the canonical weight (defect A3's
-    analogue): about 18% bright in the indirect room with 8 neighbours."""
+    analogue): about 18% bright in the indirect room with 8 neighbours; in both spatial kernels."""
     ref = room_reference(3)
-    settings = {"temporal": False, "spatial.neighbors": 8, "direct": "pt"}
+    settings = {"temporal": False, "spatial.neighbors": 8, "direct": "pt", "spatial.reciprocal": reciprocal}
     r = runs(indirect_room(), settings, 64, 16, 3)
     check(r, ref.image, ref.batch_variance_of_mean, other=ref, tile=4)
     m = runs(indirect_room(), {**settings, "debug.mutation": "drop_failed_shifts"}, 64, 16, 3, allow_mutation=True)

@@ -46,6 +46,12 @@ MATRIX = {
     "C4-cap-5": ({**OFFICIAL, "temporal.cap": 5.0}, "none"),
     "C4-direct-pt": ({**OFFICIAL, "direct": "pt"}, "none"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
+    # reciprocal neighbours (spatial.reciprocal): the pass on its own, several rounds, with the defaults
+    "C3-reciprocal-k3": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True}, "none"),
+    "C3-reciprocal-k8-rounds-2": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True, "spatial.neighbors": 8,
+                                   "spatial.rounds": 2}, "none"),
+    "C4-reciprocal": ({"spatial.reciprocal": True}, "none"),
+    "C4-reciprocal-orbit": ({"spatial.reciprocal": True}, "orbit"),
     # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
     "C6-mcmc-z": ({**OFFICIAL, "mcmc.steps": 2}, "none"),
     "C6-mcmc-rc-prev": ({**OFFICIAL, "mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),

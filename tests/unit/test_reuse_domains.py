@@ -7,8 +7,8 @@ import warp as wp
 import restir
 from restir.config import ConfigError
 from restir.device.camera import Camera, generate_ray
-from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reproject, resolve_spatial_radius,
-                                                     spatial_neighbor, spatial_radius_for)
+from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reciprocal_pairing, reciprocal_partner, reproject,
+                                                     resolve_spatial_radius, spatial_neighbor, spatial_radius_for)
 from restir.scene.upload import DeviceScene
 
 
@@ -71,6 +71,46 @@ def test_spatial_neighbors_are_uniform_in_the_disk(radius, device):
     wp.launch(neighbor_kernel, dim=n, inputs=[wp.array(u, dtype=wp.vec2, device=device), 0, w, h, radius, out],
               device=device)
     assert 0.6 < np.mean(out.numpy() == NO_PIXEL) < 0.9
+
+
+@wp.kernel
+def partner_kernel(u: wp.array(dtype=wp.vec4), width: int, height: int, radius: float,
+                   out: wp.array2d(dtype=wp.int32)):
+    d, pixel = wp.tid()
+    v = u[d]
+    out[d, pixel] = reciprocal_partner(pixel, width, height,
+                                       reciprocal_pairing(radius, wp.vec2(v[0], v[1]), wp.vec2(v[2], v[3])))
+
+
+@pytest.mark.parametrize("radius", [2.0, 2.37, 9.5])
+def test_reciprocal_pairings_are_matchings_within_the_radius(radius, device):
+    """spatial.reciprocal's pairings: for every draw, partner(partner(p)) = p (the neighbour's
+    neighbour is the pixel: what lets one pair of shifts serve both), never the pixel itself,
+    within the radius (+0.71 px of rounding), off screen only near the border; and within one
+    draw the offsets differ from pixel to pixel, and over draws they cover the disk's offsets
+    (the mean distance is within 30% of the disk's own rounded neighbours')."""
+    rng = np.random.default_rng(2)
+    draws, w, h = 400, 37, 29
+    u = wp.array(rng.random((draws, 4)).astype(np.float32), dtype=wp.vec4, device=device)
+    out = wp.zeros((draws, w * h), dtype=wp.int32, device=device)
+    wp.launch(partner_kernel, dim=(draws, w * h), inputs=[u, w, h, radius, out], device=device)
+    q = out.numpy()
+    p = np.broadcast_to(np.arange(w * h), q.shape)
+    valid = q != NO_PIXEL
+    assert valid.mean() > 0.7
+    assert np.all(q[valid] != p[valid])
+    back = np.take_along_axis(q, np.where(valid, q, 0), axis=1)
+    assert np.all(back[valid] == p[valid])  # an involution
+    dx, dy = q % w - p % w, q // w - p // w
+    dist = np.hypot(dx, dy)[valid]
+    assert dist.max() <= radius + 0.71
+    offsets = {(a, b) for a, b in zip(dx[valid], dy[valid])}
+    disk = {(a, b) for a in range(-10, 11) for b in range(-10, 11) if 0 < a * a + b * b <= radius * radius}
+    assert len(offsets & disk) >= 0.8 * len(disk)
+    per_draw = [len(set(zip(dx[d][valid[d]], dy[d][valid[d]]))) for d in range(draws)]
+    assert min(per_draw) >= 2  # not one offset for the whole screen
+    mean_disk = np.mean([np.hypot(a, b) for a, b in disk])
+    assert abs(dist.mean() / mean_disk - 1) < 0.3, (dist.mean(), mean_disk)
 
 
 def test_spatial_radius_rule():

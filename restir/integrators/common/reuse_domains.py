@@ -42,6 +42,46 @@ def spatial_neighbor(u: wp.vec2, pixel: int, width: int, height: int, radius: fl
         return NO_PIXEL
     return ny * width + nx
 
+@wp.func
+def reciprocal_pairing(radius: float, u_mask: wp.vec2, u_shift: wp.vec2) -> wp.vec4i:
+    """One reciprocal draw (spatial.reciprocal), the same for every pixel of a frame: a mask
+    (a, b) from a disk of `radius` pixels (u_mask; never (0, 0)) and a shift (tx, ty) of the grid
+    (u_shift, below the mask's power-of-two period). See reciprocal_partner."""
+    o = square_to_uniform_disk_concentric(u_mask) * radius
+    a = wp.abs(int(wp.round(o[0])))
+    b = wp.abs(int(wp.round(o[1])))
+    if a == 0 and b == 0:
+        a = 1  # a pixel is never its own neighbour
+    period_x = int(1)
+    while period_x <= a:
+        period_x = period_x * 2
+    period_y = int(1)
+    while period_y <= b:
+        period_y = period_y * 2
+    tx = wp.min(int(u_shift[0] * float(period_x)), period_x - 1)
+    ty = wp.min(int(u_shift[1] * float(period_y)), period_y - 1)
+    return wp.vec4i(a, b, tx, ty)
+
+
+@wp.func
+def reciprocal_partner(pixel: int, width: int, height: int, pairing: wp.vec4i) -> int:
+    """The pixel paired with `pixel` by a reciprocal draw (a, b, tx, ty) (reciprocal_pairing), or
+    NO_PIXEL when that falls off screen: (x, y) is paired with (((x + tx) ^ a) - tx,
+    ((y + ty) ^ b) - ty). XOR with a fixed mask is an involution, so partner(partner(p)) = p:
+    every pixel is the neighbour of its own neighbour (a perfect matching of the screen), which is
+    what lets one thread shift a pair's two samples for both. |x' - x| <= a and |y' - y| <= b, so
+    the partner lies within the draw's radius. The offset varies from pixel to pixel with the bits
+    of x + tx (a = 3 gives -3, -1, 1 or 3), and the shift moves the 2^n-aligned blocks the pairs
+    live in from draw to draw."""
+    px = pixel % width
+    py = pixel // width
+    nx = ((px + pairing[2]) ^ pairing[0]) - pairing[2]
+    ny = ((py + pairing[3]) ^ pairing[1]) - pairing[3]
+    if nx < 0 or ny < 0 or nx >= width or ny >= height:
+        return NO_PIXEL
+    return ny * width + nx
+
+
 @wp.struct
 class Neighbor:
     """A pixel whose reservoir a pixel may reuse, with its primary hit; pixel = NO_PIXEL: none."""

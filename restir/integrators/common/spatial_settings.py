@@ -15,6 +15,10 @@ class SpatialReuseSettings(SettingsGroup):
     neighbors: int = setting("neighbors", 3, "neighbours per round")
     radius: str = setting("radius", "auto", "neighbour disk radius in pixels; auto: {radius_at_1080:g} px at 1080 "
                           "lines scaled with the height, >= 2")
+    reciprocal: bool = setting("reciprocal", False, "neighbours in pairs, each pixel the neighbour of its "
+                               "neighbour, so that one pair of shifts serves both: k shifts per pixel instead of 2k "
+                               "(ReSTIR PT Enhanced's reciprocal selection; the same estimator, other neighbours)",
+                               static=True)
     # not settings: what the method fixes (its keys' prefix, for messages; its "auto" radius)
     prefix: str = "spatial."
     radius_at_1080: float = 20.0
@@ -37,9 +41,13 @@ class SpatialReuseSettings(SettingsGroup):
         return pixels
 
 
-def spatial_reuse(prefix: str, radius_at_1080: float, rounds: int = 1, doc_prefix: str = ""):
+def spatial_reuse(prefix: str, radius_at_1080: float, rounds: int = 1, doc_prefix: str = "",
+                  reciprocal: bool | None = None):
     """A method's spatial-reuse settings field: keys under `prefix` ("spatial."), `rounds` by
-    default, "auto" meaning `radius_at_1080` pixels at 1080 lines."""
-    return component(prefix, lambda: SpatialReuseSettings(rounds=rounds, prefix=prefix, radius_at_1080=radius_at_1080),
-                     doc_prefix,
+    default, "auto" meaning `radius_at_1080` pixels at 1080 lines. reciprocal: the default of
+    `reciprocal` for a method whose pass has the reciprocal form; None: the method has no such
+    key (ReSTIR DI's and Suffix ReSTIR's passes)."""
+    return component(prefix, lambda: SpatialReuseSettings(rounds=rounds, prefix=prefix, radius_at_1080=radius_at_1080,
+                                                          reciprocal=bool(reciprocal)),
+                     doc_prefix, exclude=("reciprocal",) if reciprocal is None else (),
                      doc_args={"radius_at_1080": radius_at_1080})

@@ -92,6 +92,20 @@ def spatial_start(c: PathReservoir, k: int) -> Reuse:
     return st
 
 
+@wp.func
+def merge_neighbor(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn, own_d_i: float, j: int,
+                   u: float) -> Reuse:
+    """Neighbour j (its reservoir r, its sample shifted here: nbr) into the pairwise resampling of
+    c, with own_d_i the neighbour's density at c's sample (d_i(x_c): ShiftedOut.d_i). The
+    canonical input's share of the pair is added to the accumulator (st.mis.m_c)."""
+    out = st
+    out.mis = pairwise_add_neighbor(st.mis, nbr.d_i, nbr.d_c, luminance(c.F) * c.M, own_d_i)
+    out.s = ris_merge(st.s, out.mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j, u)
+    if out.s.selected == j:
+        out.chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
+    return out
+
+
 _pairs: dict = {}
 
 
@@ -147,14 +161,10 @@ def make_reuse_pair(shift=shift_path, module=None):
                          j: int, u: float) -> Reuse:
         """Neighbour j (sample r, domain dn, valid by geometry) into the pairwise resampling of c
         (domain dc)."""
-        out = st
         nbr = shift_in(scene, r, r.M, c.M, dc)
         own = shift_out(scene, c, r.M, dn)
+        out = merge_neighbor(st, c, r, nbr, own.d_i, j, u)
         out.tl = tally(tally(st.tl, r, nbr.t, nbr.tried, 1), c, own.t, own.tried, 0)
-        out.mis = pairwise_add_neighbor(st.mis, nbr.d_i, nbr.d_c, luminance(c.F) * c.M, own.d_i)
-        out.s = ris_merge(st.s, out.mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j, u)
-        if out.s.selected == j:
-            out.chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
         return out
 
     _pairs[shift] = (shift_in, shift_out, temporal_pair, spatial_neighbor)

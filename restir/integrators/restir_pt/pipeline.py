@@ -8,8 +8,9 @@ import dataclasses
 import functools
 
 import numpy as np
+import warp as wp
 
-from ...device.streams import PT_MAX_MCMC_STEPS
+from ...device.streams import PT_MAX_MCMC_STEPS, PT_MAX_NEIGHBORS
 from ...settings import MUTATION_DOC, setting
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
@@ -23,30 +24,34 @@ from .s1_initial import initial_kernel
 from .s2_temporal import make_trace_temporal_kernel, temporal_kernel, trace_temporal_kernel
 from .s3_mcmc import MUTATIONS as MCMC_MUTATIONS
 from .s3_mcmc import make_mcmc_kernel, mcmc_kernel
-from .s4_spatial import make_spatial_kernel, spatial_kernel
+from .s4_spatial import (make_reciprocal_spatial_kernel, make_spatial_kernel, pairings_kernel, reciprocal_spatial_kernel,
+                         spatial_kernel)
 from .s5_shade import shade_kernel
 
 
 def _shift_mutant(mutation: str) -> tuple:
     shift, module = make_shift(mutation), f"restir_pt_{mutation}"
-    return make_trace_temporal_kernel(shift, module=module), mcmc_kernel, make_spatial_kernel(shift, module=module)
+    return (make_trace_temporal_kernel(shift, module=module), mcmc_kernel, make_spatial_kernel(shift, module=module),
+            make_reciprocal_spatial_kernel(shift, module=module))
 
 
 def _mcmc_mutant(mutation: str) -> tuple:
-    return trace_temporal_kernel, make_mcmc_kernel(mutation, f"restir_pt_mcmc_{mutation}"), spatial_kernel
+    return (trace_temporal_kernel, make_mcmc_kernel(mutation, f"restir_pt_mcmc_{mutation}"), spatial_kernel,
+            reciprocal_spatial_kernel)
 
 
 # Fault injections for the mutation tests (common/mutations.py), each a build of the shipped
-# (trace + temporal, mcmc, spatial) kernels or, for the race, of the pipeline. They are built for
-# the fused pipeline, the one that ships; stages.split refuses them (check_settings).
-MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel), {
+# (trace + temporal, mcmc, spatial, reciprocal spatial) kernels or, for the race, of the pipeline.
+# They are built for the fused pipeline, the one that ships; stages.split refuses them (check_settings).
+MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, reciprocal_spatial_kernel), {
     **{m: functools.partial(_shift_mutant, m) for m in SHIFT_MUTATIONS},
     **{f"mcmc_{m}": functools.partial(_mcmc_mutant, m) for m in MCMC_MUTATIONS},
     "m_per_event": lambda: (make_trace_temporal_kernel(m_per_event=True, module="restir_pt_m_per_event"),
-                            mcmc_kernel, spatial_kernel),
+                            mcmc_kernel, spatial_kernel, reciprocal_spatial_kernel),
     "drop_failed_shifts": lambda: (
         make_trace_temporal_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"), mcmc_kernel,
-        make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
+        make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
+        make_reciprocal_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
 })
 
@@ -70,7 +75,7 @@ class PTSettings(PathReuseSettings):
     mcmc_steps: int = setting("mcmc.steps", 0, "MCMC mutations of each pixel's sample per frame, after temporal and "
                               "before spatial reuse: the path redrawn after mcmc.start, accepted with min(1, p_hat "
                               "ratio) (unbiased; measured not to decorrelate the error, docs/decorrelation.md; 0: off)")
-    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0)
+    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0, reciprocal=False)
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "
                                   "are rough")
@@ -85,7 +90,8 @@ class ReSTIRPT(PathReuseIntegrator):
     name = "restir-pt"
     STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
               "trace_temporal", "trace_initial", "temporal", "mcmc", "spatial", "shade")
-    KERNELS = (primary_hits_kernel, trace_temporal_kernel, mcmc_kernel, spatial_kernel, shade_kernel)
+    KERNELS = (primary_hits_kernel, trace_temporal_kernel, mcmc_kernel, spatial_kernel, reciprocal_spatial_kernel,
+               shade_kernel)
     Settings = PTSettings
     DESCRIPTION = "ReSTIR PT: path reuse with hybrid, reconnection or random-replay shifts; temporal and spatial reuse"
     MUTATIONS = MUTATIONS
@@ -116,6 +122,8 @@ class ReSTIRPT(PathReuseIntegrator):
 
     def allocate(self) -> None:
         self.allocate_path_reuse()
+        # a round's pairings for spatial.reciprocal (16 B per neighbour, not per pixel)
+        self.pairings = wp.zeros(PT_MAX_NEIGHBORS, dtype=wp.vec4i, device=self.device)
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
         self.mcmc_counts = np.zeros(3, np.int64)  # samples with a suffix, valid proposals, accepted
 
@@ -126,7 +134,7 @@ class ReSTIRPT(PathReuseIntegrator):
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
         mutation = self.settings.debug_mutation
-        trace_temporal, mcmc, spatial = MUTATIONS.kernels(mutation)
+        trace_temporal, mcmc, spatial, reciprocal = MUTATIONS.kernels(mutation)
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         temporal = bool(self.settings.temporal and self.prev_camera is not None)
@@ -145,10 +153,16 @@ class ReSTIRPT(PathReuseIntegrator):
         if self.settings.mcmc_steps > 0:
             self.reuse_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
                                            int(self.settings.mcmc_start == "rc_prev"), gb.current], counts=("mcmc",))
-        for rd in range(self.settings.spatial.rounds):
+        sp = self.settings.spatial
+        for rd in range(sp.rounds):
             p.spatial_round = rd
-            self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
-                            mutation == "spatial_in_place")
+            if sp.reciprocal:  # one launch per neighbour, the pass's state between them in sample_L
+                wp.launch(pairings_kernel, dim=sp.neighbors, inputs=[p], outputs=[self.pairings], device=self.device)
+                self.reuse_pass("spatial", reciprocal, [sc, p, self.width, self.height, gb.current, self.pairings],
+                                mutation == "spatial_in_place", parts=sp.neighbors, scratch=(self.sample_L,))
+            else:
+                self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
+                                mutation == "spatial_in_place")
         self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight],
                        [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
         self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins

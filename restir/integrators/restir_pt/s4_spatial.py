@@ -1,28 +1,52 @@
-"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3).
+"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3), in
+two forms that compute the same estimator over different neighbours.
 
-Neighbours: k pixels drawn uniformly in a disk of `spatial_radius` pixels, kept when on screen,
-with a primary hit and geometrically similar (G-buffers only, never reservoir contents). For
-each, its sample is shifted here and this pixel's sample there (the canonical weight's density):
-two shifts, each a replay to rcPrev and one visibility ray (done inline: see s2_temporal.py).
-Own-domain targets are the stored integrands (4.7). Reads: scene, G-buffer, reservoirs_in.
-Writes: reservoirs_out (a different buffer: ping-pong), events.
+`spatial_kernel` (the default): k pixels drawn uniformly in a disk of `spatial_radius` pixels,
+kept when on screen, with a primary hit and geometrically similar (G-buffers only, never
+reservoir contents). For each, its sample is shifted here and this pixel's sample there (the
+canonical weight's density): two shifts, each a replay to rcPrev and one visibility ray (done
+inline: see s2_temporal.py). Own-domain targets are the stored integrands (4.7).
+Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong),
+shifts, events.
+
+`reciprocal_spatial_kernel` (spatial.reciprocal; the reciprocal neighbour selection of ReSTIR
+PT Enhanced, Lin et al. 2025): the same pairwise MIS for half the shifts. The two shifts of a
+(pixel q, neighbour n) pair are also the two that n needs for q, roles swapped, when n has q as
+its neighbour. So neighbour j of every pixel is its partner in the round's j-th pairing
+(reuse_domains.reciprocal_partner: a perfect matching of the screen drawn by `pairings_kernel`
+from a stream no pixel's samples touch, so the techniques are fixed before any sample), and one
+thread makes a pair's two shifts and updates both pixels: k shifts per pixel instead of 2k.
+One launch per neighbour j: every pixel is in exactly one pair per launch and the pair's lower
+pixel does the work, so no pixel is written twice in a launch and the threads' order cannot
+matter (TESTING.md R2). Between launches a pixel's resampling state is the sample chosen so far
+(in reservoirs_out) and `sums` (w_sum, M, V): the sample radiance's buffer, which the shade stage
+fills only after this pass. The canonical input's weight m_c = 1 + sum_j share_j
+(resampling/mis.py) is known only after the last neighbour, so the canonical sample is streamed
+in parts: each pair adds it with weight share_j * p_hat * W, the last launch adds the 1 (with
+its M). Selecting any part selects the canonical sample, with total probability
+m_c p_hat W / w_sum: the estimator of one candidate of weight m_c (weighted reservoir sampling is
+exact for split candidates), with other random numbers.
+Reads: scene, G-buffer, the pairings, reservoirs_in. Writes: reservoirs_out, sums, shifts, events.
 """
 import warp as wp
 
+from ...device.color import luminance
 from ...device.rng import rng_key, rng_uniform, rng_uniform2
 from ...device.scene_device import SceneDevice
 from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, DI_SPATIAL_DIM_SELECT,
-                               DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE, STAGE_PT_SPATIAL)
-from ...resampling.mis import pairwise_normalization
-from ...resampling.ris import ris_finalize
+                               DI_SPATIAL_DIM_SHARE, DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE,
+                               PAIRING_DIM_MASK, PAIRING_DIM_SHIFT, STAGE_PT_SPATIAL, STAGE_PT_SPATIAL_PAIRING)
+from ...resampling.mis import pairwise_canonical_term, pairwise_normalization
+from ...resampling.ris import ris_finalize, ris_merge
 from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
-from ..common.reuse_domains import NO_PIXEL, spatial_technique
-from ..common.shading import load_shading
+from ..common.reuse_domains import NO_PIXEL, reciprocal_pairing, reciprocal_partner, spatial_technique
+from ..common.shading import load_shading, similar_surfaces
 from ..path_reuse.domain import domain_at
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.path_sample import PathReservoir, store
-from ..path_reuse.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
+from ..path_reuse.reuse_pair import (CANONICAL, Reuse, ShiftedIn, ShiftTally, make_reuse_pair, merge_neighbor,
+                                     spatial_canonical, spatial_start, tally)
 from ..path_reuse.shift import shift_path
 from .kernel_module import KERNEL_MODULE
 
@@ -70,3 +94,144 @@ def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None
 
 
 spatial_kernel = make_spatial_kernel()
+
+
+RESUMED = wp.constant(2000)  # `selected` of a state resumed from an earlier launch that holds a sample
+
+
+@wp.func(inline=True)
+def resume(first: bool, c: PathReservoir, sums: wp.vec3, held: PathReservoir, k: int) -> Reuse:
+    """A pixel's resampling state at the start of launch j: fresh (j = 0), or the sums and the
+    sample chosen so far, left by the launch before. Its event counts start at 0 each launch
+    (each launch's events are tallied on their own)."""
+    st = spatial_start(c, k)
+    if not first:
+        st.s.w_sum = sums[0]
+        st.s.M = sums[1]
+        st.mis.V = int(sums[2])
+        st.chosen = held
+        if sums[0] > 0.0:
+            st.s.selected = RESUMED
+            st.s.p_hat = luminance(held.F)
+    return st
+
+
+@wp.func(inline=True)
+def add_pair(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn, own_d_i: float, j: int,
+             u_select: float, u_share: float) -> Reuse:
+    """Neighbour j into the pixel's resampling (merge_neighbor), then the canonical input's share
+    of this pair as a part of the canonical candidate (no confidence: the canonical input's M
+    comes with its last part; not a zero-weight input of its own either)."""
+    out = merge_neighbor(st, c, r, nbr, own_d_i, j, u_select)
+    p_c = luminance(c.F)
+    share = pairwise_canonical_term(p_c * c.M, own_d_i, out.mis.k)
+    zero = out.s.zero
+    out.s = ris_merge(out.s, share, p_c, 1.0, c.W, 0.0, CANONICAL, u_share)
+    out.s.zero = zero
+    if out.s.selected == CANONICAL:
+        out.chosen = c
+    return out
+
+
+@wp.func(inline=True)
+def put(pixel: int, valid: int, first: bool, last: bool, st: Reuse, c: PathReservoir, u_canonical: float,
+        reservoirs_out: wp.array(dtype=PathReservoir), sums: wp.array(dtype=wp.vec3),
+        shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
+    """Write a pixel's state after its pair of launch j; after the last, the canonical input's
+    last part and the finished reservoir. A pixel without a primary hit keeps its input."""
+    if valid == 0:
+        if first:
+            reservoirs_out[pixel] = c
+        events[pixel] = packed_events(wp.vec4i(0))
+        shifts[pixel] = packed_counts(wp.vec4i(0))
+        return
+    out = st
+    if last:
+        p_c = luminance(c.F)
+        out.s = ris_merge(out.s, 1.0, p_c, 1.0, c.W, c.M, CANONICAL, u_canonical)
+        if out.s.selected == CANONICAL:
+            out.chosen = c
+        reservoirs_out[pixel] = store(out.chosen, ris_finalize(out.s, pairwise_normalization(out.mis)))
+    else:
+        reservoirs_out[pixel] = out.chosen
+        sums[pixel] = wp.vec3(out.s.w_sum, out.s.M, float(out.mis.V))
+    events[pixel] = packed_events(stage_events(out.s, out.tl.failed, out.tl.rays))
+    shifts[pixel] = packed_counts(out.tl.counts)
+
+
+@wp.kernel(module=KERNEL_MODULE)
+def pairings_kernel(params: PathReuseParams, pairings: wp.array(dtype=wp.vec4i)):
+    """The round's k pairings (thread j: the j-th), drawn from the frame's pairing stream (pixel 0:
+    the same for every pixel), before the pass: its launches read them as a fixed input."""
+    j = wp.tid()
+    key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_SPATIAL_PAIRING + params.spatial_round), wp.uint32(0))
+    dim = wp.uint32(params.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE) + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
+    pairings[j] = reciprocal_pairing(params.spatial_radius, rng_uniform2(key, dim + wp.uint32(PAIRING_DIM_MASK)),
+                                     rng_uniform2(key, dim + wp.uint32(PAIRING_DIM_SHIFT)))
+
+
+def make_reciprocal_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None):
+    """The reciprocal spatial kernel over a shift function; drop_failed builds the mutation that
+    leaves neighbours whose shift failed out of the technique set (as make_spatial_kernel's)."""
+    shift_in, _, _, _ = make_reuse_pair(shift, module)
+
+    @wp.kernel(module=module or KERNEL_MODULE)
+    def reciprocal_spatial_kernel(offset: int, j: int, scene: SceneDevice, params: PathReuseParams, width: int,
+                                  height: int, gb: GBuffer, pairings: wp.array(dtype=wp.vec4i),
+                                  reservoirs_in: wp.array(dtype=PathReservoir),
+                                  reservoirs_out: wp.array(dtype=PathReservoir), sums: wp.array(dtype=wp.vec3),
+                                  shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
+        q = wp.tid() + offset
+        n = reciprocal_partner(q, width, height, pairings[j])
+        if n != NO_PIXEL and n < q:
+            return  # the pair's lower pixel updates both
+        first = j == 0
+        last = j == params.spatial_k - 1
+        base = wp.uint32(params.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE)
+        dim = base + wp.uint32(j * DI_SPATIAL_DIMS_PER_NEIGHBOR)
+        stage = wp.uint32(STAGE_PT_SPATIAL + params.spatial_round)
+        key_q = rng_key(params.seed, params.frame, stage, wp.uint32(q))
+        c_q = reservoirs_in[q]
+        sh_q = load_shading(scene, gb, q)
+        st_q = resume(first, c_q, sums[q], reservoirs_out[q], params.spatial_k)
+        if n == NO_PIXEL:  # no neighbour j for this pixel (still a technique of the configured k)
+            put(q, sh_q.valid, first, last, st_q, c_q, rng_uniform(key_q, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
+                reservoirs_out, sums, shifts, events)
+            return
+        c_n = reservoirs_in[n]
+        sh_n = load_shading(scene, gb, n)
+        st_n = resume(first, c_n, sums[n], reservoirs_out[n], params.spatial_k)
+        q_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_q, sh_n)
+        n_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_n, sh_q)
+        into_q = ShiftedIn()  # n's sample shifted to q
+        into_n = ShiftedIn()  # q's sample shifted to n
+        if q_uses or n_uses:
+            into_q = shift_in(scene, c_n, c_n.M, c_q.M, domain_at(sh_q, params))
+            into_n = shift_in(scene, c_q, c_q.M, c_n.M, domain_at(sh_n, params))
+            if wp.static(drop_failed):
+                q_uses = q_uses and into_q.t.valid != 0
+                n_uses = n_uses and into_n.t.valid != 0
+        # each shift's rays and outcome are counted once, at the pixel it moved a sample into; a
+        # failure counts where the shifted sample was an input (TESTING.md 5.12)
+        st_q.tl = tally(ShiftTally(), c_n, into_q.t, into_q.tried, wp.where(q_uses, 1, 0))
+        st_n.tl = tally(ShiftTally(), c_q, into_n.t, into_n.tried, wp.where(n_uses, 1, 0))
+        key_n = rng_key(params.seed, params.frame, stage, wp.uint32(n))
+        # the pair's two shifts serve both pixels: one's "neighbour's sample here" is the other's
+        # "own sample there" (into_n.d_c = p_hat_n(T x_q) J M_n = d_n at x_q)
+        if q_uses:
+            st_q = add_pair(st_q, c_q, c_n, into_q, into_n.d_c, j,
+                            rng_uniform(key_q, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)),
+                            rng_uniform(key_q, dim + wp.uint32(DI_SPATIAL_DIM_SHARE)))
+        if n_uses:
+            st_n = add_pair(st_n, c_n, c_q, into_n, into_q.d_c, j,
+                            rng_uniform(key_n, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)),
+                            rng_uniform(key_n, dim + wp.uint32(DI_SPATIAL_DIM_SHARE)))
+        put(q, sh_q.valid, first, last, st_q, c_q, rng_uniform(key_q, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
+            reservoirs_out, sums, shifts, events)
+        put(n, sh_n.valid, first, last, st_n, c_n, rng_uniform(key_n, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
+            reservoirs_out, sums, shifts, events)
+
+    return reciprocal_spatial_kernel
+
+
+reciprocal_spatial_kernel = make_reciprocal_spatial_kernel()
