@@ -108,17 +108,19 @@ class Integrator:
         return a
 
     def run_stage(self, stage: str, kernel, inputs: list, outputs: list, nonfinite: str = "nonfinite_weights",
-                  new_call: bool = True) -> None:
+                  new_call: bool = True, tally: bool = True) -> None:
         """Launch one stage over the pixels, timed. Every stage kernel takes `events` (8 bytes per
         pixel, common/events.py) as its last output; they are summed on the device (the tally,
         read into the counters once per frame), non-finite values under the name `nonfinite` (weights for resampling stages, outputs for
         stages that write radiance). new_call=False: a further part of the same run of the stage
-        (its time adds to that run's)."""
+        (its time adds to that run's). tally=False: a launch whose kernel adds its events to those
+        already in `events`, summed with a later launch's."""
         key = self.stage_prefix + stage
         with self.timer.stage(key, new_call):
             launch_pixels(kernel, self.num_pixels, inputs, [*outputs, self.events], self.device, self.slices,
                           self.reverse_launch)
-        self.tally.add(("stage", key, nonfinite), self.events)
+        if tally:
+            self.tally.add(("stage", key, nonfinite), self.events)
 
     def collect_events(self) -> None:
         """Read the tally (once per frame: the one wait for the device's sums) into the counters,
@@ -183,7 +185,7 @@ class Integrator:
         return sum(self.stage_rays.values())
 
     def reuse_pass(self, stage: str, kernel, inputs: list, extra_outputs: tuple = (), in_place: bool = False,
-                   parts: int | None = None, after_part=None) -> None:
+                   parts: int | None = None) -> None:
         """A resampling pass of a method with reservoirs (`self.reservoirs`, a PingPong, and a
         scratch buffer `self.pass_out`): reads this sample's reservoirs, writes `pass_out`, then
         the two swap (ping-pong), so no pixel ever reads a reservoir another pixel of the pass
@@ -192,7 +194,8 @@ class Integrator:
         pass writes into the history's buffer, and the buffer it read becomes the history's.
         in_place: the race mutant, which writes the buffer it reads. parts: a pass made of that many
         launches, the part's index the kernel's first input (each launch reads the same input and
-        carries its state on in the outputs; `after_part()` runs after each, for its counts)."""
+        carries its state on in the outputs, its per-pixel counts too: they are summed once, after
+        the last)."""
         history_free = self.pass_out is None
         if history_free:
             self.pass_out = self.reservoirs.previous
@@ -202,8 +205,8 @@ class Integrator:
             self.run_stage(stage, kernel, [*inputs, current], [out, *extra_outputs])
         else:
             for j in range(parts):
-                self.run_stage(stage, kernel, [j, *inputs, current], [out, *extra_outputs], new_call=j == 0)
-                after_part()
+                self.run_stage(stage, kernel, [j, *inputs, current], [out, *extra_outputs], new_call=j == 0,
+                               tally=j == parts - 1)
         if not in_place:
             self.reservoirs.current, self.pass_out = self.pass_out, current
         if history_free:

@@ -144,17 +144,13 @@ class PathReuseIntegrator(Integrator):
                    parts: int | None = None, scratch: tuple = ()) -> None:
         """The base class's ping-pong pass, with the per-pixel counts it writes to `shift_events`
         summed for the stats: its shifts, or the tally key `counts` (a pass that counts something
-        else, such as the MCMC stage's proposals). parts: a pass of that many launches (each
-        counted), scratch: buffers it writes before `shift_events`."""
-        def count() -> None:
-            if counts is None:
-                self.count_shifts(stage)
-            else:
-                self.tally.add(counts, self.shift_events)
-
-        super().reuse_pass(stage, kernel, inputs, (*scratch, self.shift_events), in_place, parts, count)
-        if parts is None:
-            count()
+        else, such as the MCMC stage's proposals). parts: a pass of that many launches (the kernel
+        adds its counts up over them), scratch: buffers it writes before `shift_events`."""
+        super().reuse_pass(stage, kernel, inputs, (*scratch, self.shift_events), in_place, parts)
+        if counts is None:
+            self.count_shifts(stage)
+        else:
+            self.tally.add(counts, self.shift_events)
 
     def render_sample(self, frame: int, sample: int, camera):
         """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the

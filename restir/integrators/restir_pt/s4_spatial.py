@@ -42,6 +42,7 @@ from ..common.events import EventCounts, PassCounts, packed_counts, packed_event
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, reciprocal_pairing, reciprocal_partner, spatial_technique
 from ..common.shading import load_shading, similar_surfaces
+from ..common.tally import unpacked
 from ..path_reuse.domain import domain_at
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.path_sample import PathReservoir, store
@@ -102,8 +103,8 @@ RESUMED = wp.constant(2000)  # `selected` of a state resumed from an earlier lau
 @wp.func(inline=True)
 def resume(first: bool, c: PathReservoir, sums: wp.vec3, held: PathReservoir, k: int) -> Reuse:
     """A pixel's resampling state at the start of launch j: fresh (j = 0), or the sums and the
-    sample chosen so far, left by the launch before. Its event counts start at 0 each launch
-    (each launch's events are tallied on their own)."""
+    sample chosen so far, left by the launch before (its counts start at 0: `put` adds them to
+    the earlier launches')."""
     st = spatial_start(c, k)
     if not first:
         st.s.w_sum = sums[0]
@@ -137,13 +138,14 @@ def add_pair(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn, own_
 def put(pixel: int, valid: int, first: bool, last: bool, st: Reuse, c: PathReservoir, u_canonical: float,
         reservoirs_out: wp.array(dtype=PathReservoir), sums: wp.array(dtype=wp.vec3),
         shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
-    """Write a pixel's state after its pair of launch j; after the last, the canonical input's
-    last part and the finished reservoir. A pixel without a primary hit keeps its input."""
+    """Write a pixel's state after its pair of launch j, its counts added to the launches' before;
+    after the last, the canonical input's last part and the finished reservoir. A pixel without a
+    primary hit keeps its input."""
     if valid == 0:
         if first:
             reservoirs_out[pixel] = c
-        events[pixel] = packed_events(wp.vec4i(0))
-        shifts[pixel] = packed_counts(wp.vec4i(0))
+            events[pixel] = packed_events(wp.vec4i(0))
+            shifts[pixel] = packed_counts(wp.vec4i(0))
         return
     out = st
     if last:
@@ -155,8 +157,14 @@ def put(pixel: int, valid: int, first: bool, last: bool, st: Reuse, c: PathReser
     else:
         reservoirs_out[pixel] = out.chosen
         sums[pixel] = wp.vec3(out.s.w_sum, out.s.M, float(out.mis.V))
-    events[pixel] = packed_events(stage_events(out.s, out.tl.failed, out.tl.rays))
-    shifts[pixel] = packed_counts(out.tl.counts)
+    # the counts add up over the launches and are summed once, after the last (reuse_pass's parts)
+    ev = stage_events(out.s, out.tl.failed, out.tl.rays)
+    sh = out.tl.counts
+    if not first:
+        ev += unpacked(events[pixel])
+        sh += unpacked(shifts[pixel])
+    events[pixel] = packed_events(ev)
+    shifts[pixel] = packed_counts(sh)
 
 
 @wp.kernel(module=KERNEL_MODULE)
