@@ -171,7 +171,10 @@ MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128,
                # direct=pt (ReSTIR PT's default since 2026-12-06) in the room: MDB 7.3% at 64 runs, 5.0% at 128
                **{("indirect-room", c): 128 for c in ("C4-defaults", "C4-orbit", "C4-dolly", "C4-centre")},
                ("masks", "C4-official"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
-               ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128}
+               ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128,
+               # the defaults with reciprocal neighbours, as the defaults' own cells
+               ("indirect-room", "C4-reciprocal"): 128, ("indirect-room", "C4-reciprocal-orbit"): 128,
+               ("veach-bidir", "C4-reciprocal-orbit"): 384}
 
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):
