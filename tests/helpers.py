@@ -172,9 +172,9 @@ MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128,
                **{("indirect-room", c): 128 for c in ("C4-defaults", "C4-orbit", "C4-dolly", "C4-centre")},
                ("masks", "C4-official"): 128, ("veach-bidir", "C4-orbit"): 384, ("veach-bidir", "C5-orbit"): 384,
                ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128,
-               # the defaults with reciprocal neighbours, as the defaults' own cells
-               ("indirect-room", "C4-reciprocal"): 128, ("indirect-room", "C4-reciprocal-orbit"): 128,
-               ("veach-bidir", "C4-reciprocal-orbit"): 384}
+               # the defaults with independent neighbours, as the defaults' own cells
+               ("indirect-room", "C4-independent"): 128, ("indirect-room", "C4-independent-orbit"): 128,
+               ("veach-bidir", "C4-independent-orbit"): 384}
 
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):

@@ -45,7 +45,7 @@ def check_sphere(settings, max_depth=4, k=32, frames=16, bound=0.015, allow_muta
 
 
 # (settings over the defaults: hybrid shift, direct light in the path reservoirs (direct=pt),
-# temporal reuse with cap 5 + 1 spatial round)
+# temporal reuse with cap 5 + 1 spatial round with reciprocal neighbours)
 SLOW = pytest.mark.slow  # kept out of the fast tier for its time budget (covered again by the slow matrix)
 SPHERE = {
     "defaults": {},
@@ -55,7 +55,7 @@ SPHERE = {
     "reconnection": {"shift": "reconnection", "direct": "pt"},
     "replay": {"shift": "replay", "direct": "pt"},
     "spatial-k8-rounds-3": {"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3},
-    "reciprocal": {"spatial.reciprocal": True},
+    "independent": {"spatial.reciprocal": False},  # the independent neighbours of the official ReSTIR PT
     "reciprocal-k8-rounds-3": ({"temporal": False, "spatial.neighbors": 8, "spatial.rounds": 3,
                                 "spatial.reciprocal": True}, SLOW),
     "temporal-no-cap": ({"temporal.cap": 0.0, "spatial.rounds": 0}, SLOW),

@@ -23,9 +23,10 @@ from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
 TEMPORAL = {"spatial.rounds": 0}
-# The defaults until 2026-12-06 (the official ones): every cell but the defaults' own keeps them,
-# so the verdicts in VALIDATION.md stay those of the configuration each cell ran.
-OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0}
+# The defaults until 2026-12-06 (the official ones, with independent neighbours): every cell but
+# the defaults' own keeps them, so the verdicts in VALIDATION.md stay those of the configuration
+# each cell ran.
+OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0, "spatial.reciprocal": False}
 
 MATRIX = {
     "C1-candidates-1": ({**OFFICIAL, **NO_REUSE}, "none"),
@@ -46,12 +47,14 @@ MATRIX = {
     "C4-cap-5": ({**OFFICIAL, "temporal.cap": 5.0}, "none"),
     "C4-direct-pt": ({**OFFICIAL, "direct": "pt"}, "none"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
-    # reciprocal neighbours (spatial.reciprocal): the pass on its own, several rounds, with the defaults
+    # reciprocal neighbours (spatial.reciprocal, the default): the pass on its own, several rounds
     "C3-reciprocal-k3": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True}, "none"),
     "C3-reciprocal-k8-rounds-2": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True, "spatial.neighbors": 8,
                                    "spatial.rounds": 2}, "none"),
-    "C4-reciprocal": ({"spatial.reciprocal": True}, "none"),
-    "C4-reciprocal-orbit": ({"spatial.reciprocal": True}, "orbit"),
+    # the defaults with independent neighbours (the defaults before reciprocal ones; cells
+    # C4-defaults and -orbit until then)
+    "C4-independent": ({"spatial.reciprocal": False}, "none"),
+    "C4-independent-orbit": ({"spatial.reciprocal": False}, "orbit"),
     # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
     "C6-mcmc-z": ({**OFFICIAL, "mcmc.steps": 2}, "none"),
     "C6-mcmc-rc-prev": ({**OFFICIAL, "mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),
