@@ -42,7 +42,8 @@ PT = [("pt", {}), ("pt", {"strategy": "nee"}), ("pt", {"strategy": "bsdf"}), ("p
       ("pt", {"nee.samples": 2})]
 DI = [("restir-di", {}), ("restir-di", {"visibility": "shading", "candidates.bsdf": 0})]
 RPT = [("restir-pt", {}), ("restir-pt", {"shift": "reconnection"}), ("restir-pt", {"shift": "replay"}),
-       ("restir-pt", {"direct": "restir-di", "temporal.cap": 20.0}), ("restir-pt", {"candidates": 2, "spatial.rounds": 2}),
+       ("restir-pt", {"direct": "restir-di", "temporal.cap": 20.0}),
+       ("restir-pt", {"candidates": 2, "spatial.rounds": 2}),
        ("restir-pt", {"spatial.reciprocal": True}), ("restir-pt", {"spatial.reciprocal": False})]
 SR = [("suffix-restir", {}), ("suffix-restir", {"direct": "pt"}), ("suffix-restir", {"shift": "reconnection"})]
 CASES = ([(s, m, st, None) for s in ("glossy", "room", "features", "bidir") for m, st in PT + RPT + SR]

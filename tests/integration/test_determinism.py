@@ -149,7 +149,9 @@ def render_pt(slices, mutation="none", reverse=False, reciprocal=False):
 @pytest.mark.parametrize("slices", [1, 7, 480])
 def test_restir_pt_is_independent_of_slicing(slices, reciprocal):
     """R2 for ReSTIR PT (its DI component included): ping-pong everywhere. The reciprocal spatial
-    pass writes two pixels per thread (a pair's), and no pixel that another thread of the launch reads or writes."""
+    pass writes two pixels per thread (a pair's), each of which no other thread of the launch
+    reads or writes. (render_pt pins independent neighbours by default: the race mutant below is
+    the independent pass writing its own input.)"""
     assert np.array_equal(render_pt(2, reciprocal=reciprocal), render_pt(slices, reciprocal=reciprocal))
     assert np.array_equal(render_pt(2, reciprocal=reciprocal), render_pt(slices, reverse=True, reciprocal=reciprocal))
 

@@ -7,8 +7,9 @@ import warp as wp
 import restir
 from restir.config import ConfigError
 from restir.device.camera import Camera, generate_ray
-from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reciprocal_pairing, reciprocal_partner, reproject,
-                                                     resolve_spatial_radius, spatial_neighbor, spatial_radius_for)
+from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reciprocal_pairing,
+                                                     reciprocal_partner, reproject, resolve_spatial_radius,
+                                                     spatial_neighbor, spatial_radius_for)
 from restir.scene.upload import DeviceScene
 
 

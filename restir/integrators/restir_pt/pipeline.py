@@ -24,8 +24,8 @@ from .s1_initial import initial_kernel
 from .s2_temporal import make_trace_temporal_kernel, temporal_kernel, trace_temporal_kernel
 from .s3_mcmc import MUTATIONS as MCMC_MUTATIONS
 from .s3_mcmc import make_mcmc_kernel, mcmc_kernel
-from .s4_spatial import (make_reciprocal_spatial_kernel, make_spatial_kernel, pairings_kernel, reciprocal_spatial_kernel,
-                         spatial_kernel)
+from .s4_spatial import (make_reciprocal_spatial_kernel, make_spatial_kernel, pairings_kernel,
+                         reciprocal_spatial_kernel, spatial_kernel)
 from .s5_shade import shade_kernel
 
 

@@ -1,7 +1,7 @@
 """Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3), in
 two forms that compute the same estimator over different neighbours.
 
-`spatial_kernel` (the default): k pixels drawn uniformly in a disk of `spatial_radius` pixels,
+`spatial_kernel` (spatial.reciprocal=false; the official pass): k pixels drawn uniformly in a disk of `spatial_radius` pixels,
 kept when on screen, with a primary hit and geometrically similar (G-buffers only, never
 reservoir contents). For each, its sample is shifted here and this pixel's sample there (the
 canonical weight's density): two shifts, each a replay to rcPrev and one visibility ray (done
@@ -9,7 +9,7 @@ inline: see s2_temporal.py). Own-domain targets are the stored integrands (4.7).
 Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong),
 shifts, events.
 
-`reciprocal_spatial_kernel` (spatial.reciprocal; the reciprocal neighbour selection of ReSTIR
+`reciprocal_spatial_kernel` (spatial.reciprocal, the default; the reciprocal neighbour selection of ReSTIR
 PT Enhanced, Lin et al. 2025): the same pairwise MIS for half the shifts. The two shifts of a
 (pixel q, neighbour n) pair are also the two that n needs for q, roles swapped, when n has q as
 its neighbour. So neighbour j of every pixel is its partner in the round's j-th pairing
@@ -101,17 +101,20 @@ RESUMED = wp.constant(2000)  # `selected` of a state resumed from an earlier lau
 
 
 @wp.func(inline=True)
-def resume(first: bool, c: PathReservoir, sums: wp.vec3, held: PathReservoir, k: int) -> Reuse:
-    """A pixel's resampling state at the start of launch j: fresh (j = 0), or the sums and the
-    sample chosen so far, left by the launch before (its counts start at 0: `put` adds them to
-    the earlier launches')."""
+def resume(pixel: int, first: bool, c: PathReservoir, k: int, reservoirs_out: wp.array(dtype=PathReservoir),
+           sums: wp.array(dtype=wp.vec3)) -> Reuse:
+    """A pixel's resampling state at the start of launch j: fresh (j = 0: nothing is read), or the
+    sums and the sample chosen so far, left by the launch before (its counts start at 0: `put`
+    adds them to the earlier launches')."""
     st = spatial_start(c, k)
     if not first:
-        st.s.w_sum = sums[0]
-        st.s.M = sums[1]
-        st.mis.V = int(sums[2])
+        acc = sums[pixel]
+        held = reservoirs_out[pixel]
+        st.s.w_sum = acc[0]
+        st.s.M = acc[1]
+        st.mis.V = int(acc[2])
         st.chosen = held
-        if sums[0] > 0.0:
+        if acc[0] > 0.0:
             st.s.selected = RESUMED
             st.s.p_hat = luminance(held.F)
     return st
@@ -201,14 +204,14 @@ def make_reciprocal_spatial_kernel(shift=shift_path, drop_failed: bool = False, 
         key_q = rng_key(params.seed, params.frame, stage, wp.uint32(q))
         c_q = reservoirs_in[q]
         sh_q = load_shading(scene, gb, q)
-        st_q = resume(first, c_q, sums[q], reservoirs_out[q], params.spatial_k)
+        st_q = resume(q, first, c_q, params.spatial_k, reservoirs_out, sums)
         if n == NO_PIXEL:  # no neighbour j for this pixel (still a technique of the configured k)
             put(q, sh_q.valid, first, last, st_q, c_q, rng_uniform(key_q, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
                 reservoirs_out, sums, shifts, events)
             return
         c_n = reservoirs_in[n]
         sh_n = load_shading(scene, gb, n)
-        st_n = resume(first, c_n, sums[n], reservoirs_out[n], params.spatial_k)
+        st_n = resume(n, first, c_n, params.spatial_k, reservoirs_out, sums)
         q_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_q, sh_n)
         n_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_n, sh_q)
         into_q = ShiftedIn()  # n's sample shifted to q
