@@ -6,7 +6,7 @@ rendered once per scene and camera motion; the emissive-cap sphere against its e
 Configurations: the final gather alone (prefix and suffix reuse off) for N in {1, 2, 4} prefixes
 and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
-reconnection and replay shifts; direct=pt; the pairwise gather; prefixes ending exactly at x3
+reconnection and replay shifts; the ReSTIR DI component (the defaults until direct=pt); the pairwise gather; prefixes ending exactly at x3
 (non-adaptive); a canonical suffix for every prefix; the fixed search radius; pixel-centre
 primary rays; the prototype's MMIS baseline with 1 and 8 suffixes per prefix; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and mask
 scenes, the cells of BUMP_CELLS. Welch z per channel at image,
@@ -18,26 +18,31 @@ from restir.integrators.suffix_restir.pipeline import MMIS_BASELINE
 from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
+# The official prototype's direct light, the ReSTIR DI component: the default until 2026-12-06, when
+# direct=pt became it (BENCHMARKS.md, "Suffix ReSTIR's direct light"). The cells that test one
+# stage or option keep it, as they were validated (VALIDATION.md); the defaults' cells (C5-all,
+# -orbit, -dolly, -centre, C5-all-N128) take direct=pt, and C5-official is the old C5-all.
+OFFICIAL = {"direct": "restir-di"}
 MATRIX = {
-    **{f"C5-gather-N{n}-M{m}": ({**NO_REUSE, "gather.prefixes": n, "gather.suffixes": m}, "none")
+    **{f"C5-gather-N{n}-M{m}": ({**OFFICIAL, **NO_REUSE, "gather.prefixes": n, "gather.suffixes": m}, "none")
        for n in (1, 2, 4) for m in (1, 4, 8)},
-    "C5-prefix-temporal": ({**NO_REUSE, "prefix.temporal": True}, "none"),
-    "C5-suffix-temporal": ({**NO_REUSE, "suffix.temporal": True}, "none"),
-    "C5-suffix-spatial": ({**NO_REUSE, "suffix.spatial.rounds": 1}, "none"),
+    "C5-prefix-temporal": ({**OFFICIAL, **NO_REUSE, "prefix.temporal": True}, "none"),
+    "C5-suffix-temporal": ({**OFFICIAL, **NO_REUSE, "suffix.temporal": True}, "none"),
+    "C5-suffix-spatial": ({**OFFICIAL, **NO_REUSE, "suffix.spatial.rounds": 1}, "none"),
     "C5-all": ({}, "none"),
     "C5-orbit": ({}, "orbit"),
     "C5-dolly": ({}, "dolly"),
     "C5-centre": ({}, "centre"),  # pixel-centre primary rays: every frame the same primary hit
-    "C5-reconnection": ({"shift": "reconnection"}, "none"),
-    "C5-replay": ({"shift": "replay"}, "none"),
-    "C5-direct-pt": ({"direct": "pt"}, "none"),
-    "C5-pairwise-M4": ({"gather.mis": "pairwise", "gather.suffixes": 4}, "none"),
-    "C5-prefix-exactly-x3": ({"prefix.adaptive": False, "prefix.min_length": 2}, "none"),
-    "C5-canonical-each": ({"gather.canonical_per_prefix": True}, "none"),
-    "C5-radius-fixed": ({"gather.radius_type": "fixed"}, "none"),
+    "C5-official": ({**OFFICIAL}, "none"),  # the defaults until 2026-12-06 (cell C5-all then)
+    "C5-reconnection": ({**OFFICIAL, "shift": "reconnection"}, "none"),
+    "C5-replay": ({**OFFICIAL, "shift": "replay"}, "none"),
+    "C5-pairwise-M4": ({**OFFICIAL, "gather.mis": "pairwise", "gather.suffixes": 4}, "none"),
+    "C5-prefix-exactly-x3": ({**OFFICIAL, "prefix.adaptive": False, "prefix.min_length": 2}, "none"),
+    "C5-canonical-each": ({**OFFICIAL, "gather.canonical_per_prefix": True}, "none"),
+    "C5-radius-fixed": ({**OFFICIAL, "gather.radius_type": "fixed"}, "none"),
     # the official prototype's MMIS baseline (MMIS_BASELINE): fresh suffixes gathered by MIS, no reuse
-    "C5-mmis-M1": (MMIS_BASELINE, "none"),
-    "C5-mmis-M8": ({**MMIS_BASELINE, "gather.suffixes": 8}, "none"),
+    "C5-mmis-M1": ({**OFFICIAL, **MMIS_BASELINE}, "none"),
+    "C5-mmis-M8": ({**OFFICIAL, **MMIS_BASELINE, "gather.suffixes": 8}, "none"),
 }
 
 
