@@ -3,7 +3,7 @@ runs (restir.validation.IndependentRuns: a run's statistic is its average image 
 and its mutants (TESTING.md 5.11).
 
 - The emissive-cap sphere (A1: every non-emitting pixel has the same analytic value), 16x16,
-  max_depth 5, K = 32 runs x T = 8 frames: defaults, direct=pt, one gathered prefix, four gathered
+  max_depth 5, K = 32 runs x T = 8 frames: defaults (direct=pt), the ReSTIR DI component, one gathered prefix, four gathered
   suffixes (Talbot and pairwise), the reconnection and replay shifts, prefixes ending at x3 or
   later. Its prefix ends all see the same irradiance, so any mis-weighting of gathered or
   canonical suffixes shows in the mean.
@@ -32,7 +32,7 @@ def sphere_runs(settings, runs=SPHERE_RUNS, allow_mutation=False):
 
 SPHERE_CONFIGS = {
     "defaults": {},
-    "direct-pt": {"direct": "pt"},
+    "direct-restir-di": {"direct": "restir-di"},
     "one-prefix": {"gather.prefixes": 1},
     "four-suffixes": {"gather.suffixes": 4},
     "four-suffixes-pairwise": {"gather.suffixes": 4, "gather.mis": "pairwise"},
@@ -79,3 +79,14 @@ def test_mutants_are_biased_on_the_sphere(mutation, settings, runs):
     r = sphere_runs({**settings, "debug.mutation": mutation}, runs, allow_mutation=True)
     with pytest.raises(AssertionError):
         check(r, sphere_cap_radiance(0.5, 1.0, 0.05, 5), rel_tol=ANALYTIC_REL_TOL)
+
+
+def test_memory_per_pixel():
+    """Issue 23's memory target, 400 B per pixel with the film's accumulation not counted, met by
+    the defaults (direct=pt; the primary rays rebuilt from the camera position): 384 B; with the
+    ReSTIR DI component 444 B. The registry counts every buffer the method allocates."""
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    for settings, expected in (({}, 384), ({"direct": "restir-di"}, 444)):
+        res = restir.render(scene, restir.RenderConfig(method="suffix-restir", spp=2, settings=settings))
+        bpp = res.stats["bytes_per_pixel"]
+        assert bpp["total"] - bpp["film_mean"] - bpp["film_m2"] == expected, bpp

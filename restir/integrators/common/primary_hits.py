@@ -1,7 +1,8 @@
 """Stage "primary hits" (every method's first stage): one camera ray per pixel and sample.
 
 Reads: scene, camera (the camera stream shared by every method, so methods compare with common
-random numbers). Writes: gb (the G-buffer: triangle, barycentrics, distance, ray direction),
+random numbers). Writes: gb (the G-buffer: triangle and barycentrics; the ray is rebuilt from the camera position,
+which the caller sets with gbuffer.set_camera_origin),
 weight (the filter weight of the camera sample), emission (emitted radiance seen directly,
 times the filter weight: the depth-1 term of every estimator), events (one ray).
 """
@@ -23,10 +24,8 @@ def primary_hits_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: w
     pixel = wp.tid() + offset
     ray = camera_ray(camera, seed, frame, pixel, sample)
     hit = trace_closest(scene, ray.o, ray.d, T_MAX)
-    gb.dir[pixel] = ray.d
     gb.tri[pixel] = hit.tri
     gb.bary[pixel] = hit.bary
-    gb.t[pixel] = hit.t
     weight[pixel] = ray.weight
     Le = wp.vec3(0.0)
     if hide_emitters == 0:

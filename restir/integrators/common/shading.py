@@ -32,10 +32,18 @@ def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     if tri < 0:
         return s
     b = gb.bary[pixel]
-    s.hit = surface_at(scene, tri, b[0], b[1], gb.t[pixel])
-    s.frame = shading_frame(scene, s.hit, -gb.dir[pixel])
+    s.hit = surface_at(scene, tri, b[0], b[1], 0.0)
+    d = wp.vec3(0.0)
+    if gb.from_camera != 0:  # the primary ray, rebuilt: camera position -> hit (gbuffer.py)
+        to_hit = s.hit.p - gb.origin
+        s.hit.t = wp.length(to_hit)
+        d = to_hit / s.hit.t
+    else:
+        s.hit.t = gb.t[pixel]
+        d = gb.dir[pixel]
+    s.frame = shading_frame(scene, s.hit, -d)
     s.mat = material_at(scene, s.hit, s.frame)
-    s.wi = to_local(s.frame, -gb.dir[pixel])
+    s.wi = to_local(s.frame, -d)
     s.valid = 1
     return s
 

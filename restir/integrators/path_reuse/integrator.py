@@ -11,7 +11,7 @@ from ...settings import Settings, setting
 from ..base import Integrator
 from ..common.primary_hits import primary_hits_kernel
 from ..common.events import PassCounts
-from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.gbuffer import PingPong, allocate_gbuffer, set_camera_origin
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
 
@@ -156,6 +156,7 @@ class PathReuseIntegrator(Integrator):
         """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the
         method's resampling passes and output (`resample_sample`), then this sample's final
         reservoirs and primary hits become the next one's history."""
+        set_camera_origin(self.gbuffers.current, camera)
         self.run_stage("gbuffer", primary_hits_kernel,
                        [self.dscene.scene, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame),
                         sample, int(bool(self.settings.hide_emitters))],

@@ -168,7 +168,8 @@ class SuffixReSTIR(PathReuseIntegrator):
             s.gather_fallback_radius = self.fallback_radius
         # prefixes: the resampled ones (this frame's and the previous)
         self.prefixes = PingPong(self.buffer("prefixes", PrefixReservoir), self.buffer("prefixes_prev", PrefixReservoir))
-        self.prefix_gbs = PingPong(allocate_gbuffer(self, "prefix_gbuffer"), allocate_gbuffer(self, "prefix_gbuffer_prev"))
+        self.prefix_gbs = PingPong(allocate_gbuffer(self, "prefix_gbuffer", store_rays=True),
+                                   allocate_gbuffer(self, "prefix_gbuffer_prev", store_rays=True))
         # the search structure: a box per pixel (centre and half-size; corners for the BVH)
         self.search = SearchStructure()
         self.search.kind = int(SEARCHES[s.gather_search])
