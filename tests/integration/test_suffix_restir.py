@@ -3,9 +3,9 @@ runs (restir.validation.IndependentRuns: a run's statistic is its average image 
 and its mutants (TESTING.md 5.11).
 
 - The emissive-cap sphere (A1: every non-emitting pixel has the same analytic value), 16x16,
-  max_depth 5, K = 32 runs x T = 8 frames: defaults (direct=pt), the ReSTIR DI component, one gathered prefix, four gathered
-  suffixes (Talbot and pairwise), the reconnection and replay shifts, prefixes ending at x3 or
-  later. Its prefix ends all see the same irradiance, so any mis-weighting of gathered or
+  max_depth 5, K = 32 runs x T = 8 frames: defaults (direct=pt), the ReSTIR DI component, one
+  gathered prefix, four gathered suffixes (Talbot and pairwise), the reconnection and replay
+  shifts, prefixes ending at x3 or later. Its prefix ends all see the same irradiance, so any mis-weighting of gathered or
   canonical suffixes shows in the mean.
 - The indirect room (light hidden from the camera, glossy surfaces), 24x24, max_depth 5, against
   the path tracer over K = 48 runs x T = 8 frames x 16 spp.

@@ -6,11 +6,12 @@ rendered once per scene and camera motion; the emissive-cap sphere against its e
 Configurations: the final gather alone (prefix and suffix reuse off) for N in {1, 2, 4} prefixes
 and M in {1, 4, 8} suffixes; prefix temporal reuse only, suffix temporal only, suffix spatial only
 (each with the gather); everything (the defaults); the orbiting and dollying camera; the
-reconnection and replay shifts; the ReSTIR DI component (the defaults until direct=pt); the pairwise gather; prefixes ending exactly at x3
-(non-adaptive); a canonical suffix for every prefix; the fixed search radius; pixel-centre
-primary rays; the prototype's MMIS baseline with 1 and 8 suffixes per prefix; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and mask
-scenes, the cells of BUMP_CELLS. Welch z per channel at image,
-tile and pixel level, alpha = 1e-3 per configuration, the MDB bounded per scene.
+reconnection and replay shifts; the ReSTIR DI component (the defaults until direct=pt); the
+pairwise gather; prefixes ending exactly at x3 (non-adaptive); a canonical suffix for every
+prefix; the fixed search radius; pixel-centre primary rays; the prototype's MMIS baseline with 1
+and 8 suffixes per prefix; on three scenes, N = 128 prefixes (MANY_PREFIXES); on the bump-map and
+mask scenes, the cells of BUMP_CELLS. Welch z per channel at image, tile and pixel level, alpha =
+1e-3 per configuration, the MDB bounded per scene.
 """
 import pytest
 

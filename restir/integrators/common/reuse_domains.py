@@ -70,9 +70,9 @@ def reciprocal_partner(pixel: int, width: int, height: int, pairing: wp.vec4i) -
     ((y + ty) ^ b) - ty). XOR with a fixed mask is an involution, so partner(partner(p)) = p:
     every pixel is the neighbour of its own neighbour (a perfect matching of the screen), which is
     what lets one thread shift a pair's two samples for both. |x' - x| <= a and |y' - y| <= b, so
-    the partner lies within the draw's radius (plus the rounding of a and b: 0.71 px at most). The offset varies from pixel to pixel with the bits
-    of x + tx (a = 3 gives -3, -1, 1 or 3), and the shift moves the 2^n-aligned blocks the pairs
-    live in from draw to draw."""
+    the partner lies within the draw's radius (plus the rounding of a and b: 0.71 px at most).
+    The offset varies from pixel to pixel with the bits of x + tx (a = 3 gives -3, -1, 1 or 3),
+    and the shift moves the 2^n-aligned blocks the pairs live in from draw to draw."""
     px = pixel % width
     py = pixel // width
     nx = ((px + pairing[2]) ^ pairing[0]) - pairing[2]

@@ -9,9 +9,9 @@ import warp as wp
 from ...device.streams import PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
 from ...settings import Settings, setting
 from ..base import Integrator
-from ..common.primary_hits import primary_hits_kernel
+from ..common.primary_hits import trace_primary_hits
 from ..common.events import PassCounts
-from ..common.gbuffer import PingPong, allocate_gbuffer, set_camera_origin
+from ..common.gbuffer import PingPong, allocate_gbuffer
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
 
@@ -156,11 +156,9 @@ class PathReuseIntegrator(Integrator):
         """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the
         method's resampling passes and output (`resample_sample`), then this sample's final
         reservoirs and primary hits become the next one's history."""
-        set_camera_origin(self.gbuffers.current, camera)
-        self.run_stage("gbuffer", primary_hits_kernel,
-                       [self.dscene.scene, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame),
-                        sample, int(bool(self.settings.hide_emitters))],
-                       [self.gbuffers.current, self.primary_weight, self.emission])
+        trace_primary_hits(self, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame), sample,
+                           int(bool(self.settings.hide_emitters)), self.gbuffers.current, self.primary_weight,
+                           self.emission)
         direct = self.emission
         if self.di is not None:
             self.di.resample_and_shade(frame, sample)

@@ -10,9 +10,9 @@ import warp as wp
 from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS
 from ...settings import MUTATION_DOC, Settings, setting
 from ..base import Integrator
-from ..common.gbuffer import PingPong, allocate_gbuffer, set_camera_origin
+from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
-from ..common.primary_hits import primary_hits_kernel
+from ..common.primary_hits import primary_hits_kernel, trace_primary_hits
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from .params import DIParams
 from .reservoir import DIReservoir
@@ -135,10 +135,8 @@ class ReSTIRDI(Integrator):
     def trace_primary(self, frame: int, sample: int, camera) -> None:
         """The primary-hit stage of one sample (skipped when another method owns that layer)."""
         p = self.params(frame, sample)
-        set_camera_origin(self.gbuffers.current, camera)
-        self.run_stage("gbuffer", primary_hits_kernel, [self.dscene.scene, camera, p.seed, p.frame, sample,
-                                                        p.hide_emitters],
-                       [self.gbuffers.current, self.primary_weight, self.emission])
+        trace_primary_hits(self, camera, p.seed, p.frame, sample, p.hide_emitters, self.gbuffers.current,
+                           self.primary_weight, self.emission)
 
     def resample_and_shade(self, frame: int, sample: int) -> None:
         """Every stage after the primary hits, for one sample: direct light into `sample_L`."""

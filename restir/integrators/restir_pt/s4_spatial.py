@@ -1,16 +1,16 @@
 """Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3), in
 two forms that compute the same estimator over different neighbours.
 
-`spatial_kernel` (spatial.reciprocal=false; the official pass): k pixels drawn uniformly in a disk of `spatial_radius` pixels,
-kept when on screen, with a primary hit and geometrically similar (G-buffers only, never
-reservoir contents). For each, its sample is shifted here and this pixel's sample there (the
+`spatial_kernel` (spatial.reciprocal=false; the official pass): k pixels drawn uniformly in a
+disk of `spatial_radius` pixels, kept when on screen, with a primary hit and geometrically
+similar (G-buffers only, never reservoir contents). For each, its sample is shifted here and this pixel's sample there (the
 canonical weight's density): two shifts, each a replay to rcPrev and one visibility ray (done
 inline: see s2_temporal.py). Own-domain targets are the stored integrands (4.7).
 Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong),
 shifts, events.
 
-`reciprocal_spatial_kernel` (spatial.reciprocal, the default; the reciprocal neighbour selection of ReSTIR
-PT Enhanced, Lin et al. 2025): the same pairwise MIS for half the shifts. The two shifts of a
+`reciprocal_spatial_kernel` (spatial.reciprocal, the default; the reciprocal neighbour selection
+of ReSTIR PT Enhanced, Lin et al. 2025): the same pairwise MIS for half the shifts. The two shifts of a
 (pixel q, neighbour n) pair are also the two that n needs for q, roles swapped, when n has q as
 its neighbour. So neighbour j of every pixel is its partner in the round's j-th pairing
 (reuse_domains.reciprocal_partner: a perfect matching of the screen drawn by `pairings_kernel`
