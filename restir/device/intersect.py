@@ -1,6 +1,6 @@
 """Ray queries: closest hit and visibility, with Mitsuba's self-intersection offsets.
 
-All tracing goes through `trace_closest` and `is_visible`: Embree on the CPU, Warp's BVH on
+All tracing goes through `trace_closest` and `unblocked`: Embree on the CPU, Warp's BVH on
 CUDA (device/native_trace.py), so every stage stays single-source.
 """
 import warp as wp
@@ -72,21 +72,38 @@ def trace_closest(scene: SceneDevice, o: wp.vec3, d: wp.vec3, t_max: float) -> S
 
 
 @wp.func
-def is_visible(scene: SceneDevice, o: wp.vec3, d: wp.vec3, dist: float) -> bool:
+def unblocked(mesh: wp.uint64, embree_scene: wp.uint64, embree_occluded: wp.uint64, o: wp.vec3, d: wp.vec3,
+              dist: float) -> bool:
     """True if nothing blocks the unit direction d from o over (0, dist); stops short of the end."""
-    return not native_occluded(scene.mesh, scene.embree_scene, scene.embree_occluded, o, d, dist * (1.0 - SHADOW_EPSILON))
+    return not native_occluded(mesh, embree_scene, embree_occluded, o, d, dist * (1.0 - SHADOW_EPSILON))
 
 
 @wp.func
+def is_visible(scene: SceneDevice, o: wp.vec3, d: wp.vec3, dist: float) -> bool:
+    return unblocked(scene.mesh, scene.embree_scene, scene.embree_occluded, o, d, dist)
+
+
+@wp.func(inline=False)
+def segment_unblocked(mesh: wp.uint64, embree_scene: wp.uint64, embree_occluded: wp.uint64, p: wp.vec3, ng: wp.vec3,
+                      wi: wp.vec3, light_p: wp.vec3, light_n: wp.vec3, is_env: int) -> bool:
+    """visible_to_light's work, out of line on the three handles it reads. Warp passes structs by
+    value: taking the whole SceneDevice (1152 B), this function, which the reuse kernels' inliner
+    keeps out of line, copied it at every shadow ray (BENCHMARKS.md, "The shift inlined, and the
+    shadow ray on three handles")."""
+    origin = offset_origin(p, ng, wi)
+    if is_env != 0:
+        return unblocked(mesh, embree_scene, embree_occluded, origin, wi, T_MAX)
+    target = offset_origin(light_p, light_n, -wi)
+    seg = target - origin
+    dist = wp.length(seg)
+    return dist > 0.0 and unblocked(mesh, embree_scene, embree_occluded, origin, seg / dist, dist)
+
+
+@wp.func(inline=True)
 def visible_to_light(scene: SceneDevice, p: wp.vec3, ng: wp.vec3, wi: wp.vec3, light_p: wp.vec3, light_n: wp.vec3,
                      is_env: int) -> bool:
     """The one shadow ray of every light connection: from surface point p (geometric normal ng)
     along unit direction wi to the light point light_p (normal light_n), or to the environment.
     Both ends are offset off their surfaces, so neither surface occludes its own connection."""
-    origin = offset_origin(p, ng, wi)
-    if is_env != 0:
-        return is_visible(scene, origin, wi, T_MAX)
-    target = offset_origin(light_p, light_n, -wi)
-    seg = target - origin
-    dist = wp.length(seg)
-    return dist > 0.0 and is_visible(scene, origin, seg / dist, dist)
+    return segment_unblocked(scene.mesh, scene.embree_scene, scene.embree_occluded, p, ng, wi, light_p, light_n,
+                             is_env)

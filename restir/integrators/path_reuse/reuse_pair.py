@@ -115,7 +115,10 @@ def make_reuse_pair(shift=shift_path, module=None):
     if shift in _pairs:
         return _pairs[shift]
 
-    @wp.func(module=module)
+    def named(fn: str):  # another shift's build gets keys of its own (one kernel module may hold two builds)
+        return None if shift is shift_path else f"reuse_{fn}_{shift.key}"
+
+    @wp.func(module=module, name=named("shift_in"))
     def shift_in(scene: SceneDevice, r: PathReservoir, M_i: float, M_c: float, dc: Domain) -> ShiftedIn:
         out = ShiftedIn()
         if holds_path(r) and r.W > 0.0:
@@ -127,7 +130,7 @@ def make_reuse_pair(shift=shift_path, module=None):
                 out.d_c = out.p_c * M_c * out.t.J
         return out
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("shift_out"))
     def shift_out(scene: SceneDevice, c: PathReservoir, M_i: float, di: Domain) -> ShiftedOut:
         out = ShiftedOut()
         if holds_path(c) and c.W > 0.0:
@@ -137,7 +140,7 @@ def make_reuse_pair(shift=shift_path, module=None):
                 out.d_i = luminance(out.t.r.F) * out.t.J * M_i
         return out
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("temporal_pair"))
     def temporal_pair(scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, Mq: float, dq: Domain,
                       u_current: float, u_history: float) -> Reuse:
         """The canonical input c (domain dc) with the history r (domain dq, confidence Mq, already
@@ -156,7 +159,7 @@ def make_reuse_pair(shift=shift_path, module=None):
             st.chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
         return st
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("spatial_neighbor"))
     def spatial_neighbor(st: Reuse, scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, dn: Domain,
                          j: int, u: float) -> Reuse:
         """Neighbour j (sample r, domain dn, valid by geometry) into the pairwise resampling of c

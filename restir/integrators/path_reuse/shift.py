@@ -86,12 +86,22 @@ MUTATIONS = ("bsdf_twice", "invert_jacobian", "drop_rc_pdf", "keep_source_jacobi
 
 
 _replay_prefixes: dict = {}  # each build's prefix replay, by mutation (tests replay prefixes as the shift does)
+_builds: dict = {}  # each build's shift, by (mutation, inline)
 
 
-def make_shift(mutation: str = "none"):
-    """The shift function; `mutation` (one of MUTATIONS, or "none") builds a fault-injected variant."""
+def make_shift(mutation: str = "none", inline: bool = False):
+    """The shift function; `mutation` (one of MUTATIONS, or "none") builds a fault-injected variant.
+    inline: the build that is inlined at its call sites (SHIFT_INLINED below); its functions take
+    names of their own, so that a kernel module can hold both builds."""
     assert mutation == "none" or mutation in MUTATIONS, mutation
+    if (mutation, inline) in _builds:
+        return _builds[mutation, inline]
     module = None if mutation == "none" else f"restir_pt_shift_{mutation}"
+    if inline:
+        module = f"{module or 'restir_shift'}_inlined"
+
+    def named(fn: str):  # the key of one of this build's functions
+        return f"shift_{fn}_inlined_{mutation}" if inline else None
     bsdf_twice = mutation == "bsdf_twice"                # the reconnection's BSDF at rcPrev applied twice
     invert_jacobian = mutation == "invert_jacobian"      # 1/J instead of J
     drop_rc_pdf = mutation == "drop_rc_pdf"              # J without the pdf ratio at z
@@ -99,7 +109,7 @@ def make_shift(mutation: str = "none"):
     dim_offset = 1 if mutation == "misaligned_replay" else 0   # replay reads the next bounce's numbers
     check_destination = mutation != "skip_destination_criteria"
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("replay_prefix"))
     def replay_prefix(scene: SceneDevice, params: PathReuseParams, x0: Shading, seed: wp.uint32, n: int) -> Replay:
         """Replay n bounces from x0 with the source path's numbers; invalid when a bounce fails,
         escapes, or reaches a vertex that would be the destination path's rc vertex."""
@@ -138,7 +148,7 @@ def make_shift(mutation: str = "none"):
             k += 1
         return y
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("replay_end"))
     def replay_end(scene: SceneDevice, params: PathReuseParams, r: PathReservoir, y: Replay) -> ShiftResult:
         """A path without an rc vertex, replayed to its last vertex y: its end event there (J = 1)."""
         res = ShiftResult()
@@ -178,7 +188,7 @@ def make_shift(mutation: str = "none"):
             res.valid = 1
         return res
 
-    @wp.func(module=module)
+    @wp.func(module=module, name=named("reconnect"))
     def reconnect(scene: SceneDevice, params: PathReuseParams, r: PathReservoir, y: Replay) -> ShiftResult:
         """Connect the destination's rcPrev y to the source's rc vertex z and keep the rest."""
         res = ShiftResult()
@@ -280,10 +290,10 @@ def make_shift(mutation: str = "none"):
             res.valid = 1
         return res
 
-    # Out of line (CUDA __noinline__): called from several places of one kernel (both directions of
-    # every pair, the gather's techniques), inlined copies made the CUDA build of a module take
-    # minutes; one call's overhead is nothing beside a shift's work.
-    @wp.func(module=module, inline=False)
+    # Out of line (CUDA __noinline__) in the default build: called from several places of one
+    # kernel (Suffix ReSTIR's gather makes several shifts per gathered prefix), inlined copies made
+    # the CUDA build of a module take minutes. The inlined build is ReSTIR PT's (SHIFT_INLINED).
+    @wp.func(module=module, inline=inline, name=named("path"))
     def shift_path(scene: SceneDevice, r: PathReservoir, dst: Domain) -> ShiftResult:
         """r's path moved into the domain dst (see the module docstring); invalid if it fails."""
         res = ShiftResult()
@@ -307,9 +317,17 @@ def make_shift(mutation: str = "none"):
         res.rays += y.rays
         return res
 
-    _replay_prefixes[mutation] = replay_prefix
+    if not inline:
+        _replay_prefixes[mutation] = replay_prefix
+    _builds[mutation, inline] = shift_path
     return shift_path
 
 
 shift_path = make_shift()
+# ReSTIR PT's reuse passes call the shift inlined: out of line, every call copies its arguments
+# (Warp passes structs by value: SceneDevice alone is 1152 B) and the compiler cannot specialise it
+# to the call site. Inlined, the spatial pass took 0.7x as long and the frame 0.88x at 512x512
+# (BENCHMARKS.md, "The shift inlined"); the module takes longer to compile (CPU 21 -> 29 s, CUDA
+# 80 -> 118 s), so Suffix ReSTIR, whose gather makes many shifts, keeps the out-of-line build.
+SHIFT_INLINED = make_shift(inline=True)
 replay_prefix = _replay_prefixes["none"]

@@ -30,7 +30,7 @@ from .s5_shade import shade_kernel
 
 
 def _shift_mutant(mutation: str) -> tuple:
-    shift, module = make_shift(mutation), f"restir_pt_{mutation}"
+    shift, module = make_shift(mutation, inline=True), f"restir_pt_{mutation}"
     return (make_trace_temporal_kernel(shift, module=module), mcmc_kernel, make_spatial_kernel(shift, module=module),
             make_reciprocal_spatial_kernel(shift, module=module))
 

@@ -34,14 +34,14 @@ from ..path_reuse.domain import domain_at
 from ..path_reuse.params import PathReuseParams
 from ..path_reuse.path_sample import PathReservoir, store
 from ..path_reuse.reuse_pair import make_reuse_pair
-from ..path_reuse.shift import shift_path
+from ..path_reuse.shift import SHIFT_INLINED
 from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
 from .s1_initial import make_initial_reservoir
 
 _built: dict = {}
 
 
-def make_temporal_reuse(shift=shift_path, drop_failed: bool = False, module=None):
+def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
     """The stage's work for one pixel as a function: (reservoir, shift counts, events) from the
     pixel's new reservoir c and shading point sc. drop_failed builds the mutation that drops a
     history whose shift failed (its M and its density in the current sample's weight). Built once
@@ -77,7 +77,7 @@ def make_temporal_reuse(shift=shift_path, drop_failed: bool = False, module=None
     return temporal_reuse
 
 
-def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=None):
+def make_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
     """The split temporal kernel (`stages.split`) over a shift function."""
     temporal_reuse = make_temporal_reuse(shift, drop_failed, module)
 
@@ -96,7 +96,7 @@ def make_temporal_kernel(shift=shift_path, drop_failed: bool = False, module=Non
     return temporal_kernel
 
 
-def make_trace_temporal_kernel(shift=shift_path, drop_failed: bool = False, m_per_event: bool = False,
+def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m_per_event: bool = False,
                                module=None):
     """The shipped kernel, stages 1 and 2 fused, over a shift function; the mutations as in
     make_temporal_reuse and s1_initial.make_initial_reservoir."""

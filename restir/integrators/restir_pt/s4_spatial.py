@@ -48,11 +48,11 @@ from ..path_reuse.params import PathReuseParams
 from ..path_reuse.path_sample import PathReservoir, store
 from ..path_reuse.reuse_pair import (CANONICAL, Reuse, ShiftedIn, ShiftTally, make_reuse_pair, merge_neighbor,
                                      spatial_canonical, spatial_start, tally)
-from ..path_reuse.shift import shift_path
+from ..path_reuse.shift import SHIFT_INLINED
 from .kernel_module import KERNEL_MODULE
 
 
-def make_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None):
+def make_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
     """The spatial kernel over a shift function; drop_failed builds the mutation that leaves
     neighbours whose shift failed out of the technique set (V, M and the canonical weight)."""
     shift_in, _, _, spatial_neighbor = make_reuse_pair(shift, module)
@@ -181,7 +181,7 @@ def pairings_kernel(params: PathReuseParams, pairings: wp.array(dtype=wp.vec4i))
                                      rng_uniform2(key, dim + wp.uint32(PAIRING_DIM_SHIFT)))
 
 
-def make_reciprocal_spatial_kernel(shift=shift_path, drop_failed: bool = False, module=None):
+def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
     """The reciprocal spatial kernel over a shift function; drop_failed builds the mutation that
     leaves neighbours whose shift failed out of the technique set (as make_spatial_kernel's)."""
     shift_in, _, _, _ = make_reuse_pair(shift, module)
