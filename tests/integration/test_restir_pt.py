@@ -242,3 +242,50 @@ def test_split_stages_refuse_fault_injections():
     cfg = restir.RenderConfig(method="restir-pt", settings={"stages.split": True, "debug.mutation": "m_per_event"})
     with pytest.raises(restir.ConfigError, match="stages.split"):
         restir.render(scene, cfg)
+
+
+def history_chain(settings: dict, frames: int = 3) -> list:
+    """The path reservoirs each frame leaves as the next one's history, frame by frame (the
+    integrator's own buffers, read after each frame; 20x16, 2 samples a frame)."""
+    from restir.api import make_integrator, sized_scene
+
+    cfg = restir.RenderConfig(method="restir-pt", spp=2, width=20, height=16, seed=9, max_depth=5, settings=settings)
+    integ = make_integrator(sized_scene(restir.load_scene("builtin:cornell-box-glossy"), cfg), cfg)
+    out = []
+    for f in range(frames):
+        integ.render_frame(f)
+        out.append(integ.reservoirs.previous.numpy().copy())
+    return out
+
+
+@pytest.mark.parametrize("passes", [{}, {"spatial.rounds": 2}, {"spatial.rounds": 3, "mcmc.steps": 1}])
+def test_temporal_history_is_the_temporal_chain(passes):
+    """temporal.history=temporal: the history is the reservoirs after temporal reuse, so the chain
+    of histories cannot depend on the passes after it (their random streams are their own): with
+    one spatial round, two or three and MCMC, it is the chain of a run without any pass, bit for
+    bit. With the official history (final) the passes feed back, and the chains differ (the test's
+    power). Mutation: `history_unkept` lets a second pass write into the kept buffer (the spare
+    skipped), so the history becomes that pass's output; caught where two passes run."""
+    alone = history_chain({"spatial.rounds": 0, "temporal.history": "temporal"})
+    kept = history_chain({**passes, "temporal.history": "temporal"})
+    assert all(np.array_equal(a, b) for a, b in zip(alone, kept))
+    final = history_chain(passes)
+    assert not np.array_equal(alone[-1], final[-1])
+    if passes:
+        unkept = history_chain({**passes, "temporal.history": "temporal", "debug.mutation": "history_unkept"})
+        assert not np.array_equal(alone[-1], unkept[-1])
+
+
+def test_temporal_history_memory_and_refusals():
+    """The kept history costs no buffer with one pass after temporal reuse (the defaults'), one
+    more (76 B per pixel) with two or more; the split pipeline refuses it, as it does a bad value."""
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    for settings, extra in (({}, 0), ({"spatial.rounds": 2}, 76), ({"mcmc.steps": 1}, 76)):
+        base = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=2, settings=settings))
+        kept = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=2,
+                                                        settings={**settings, "temporal.history": "temporal"}))
+        assert kept.stats["bytes_per_pixel"]["total"] - base.stats["bytes_per_pixel"]["total"] == extra
+    for bad, match in (({"temporal.history": "spatial"}, "temporal.history"),
+                       ({"temporal.history": "temporal", "stages.split": True}, "stages.split")):
+        with pytest.raises(restir.ConfigError, match=match):
+            restir.render(scene, restir.RenderConfig(method="restir-pt", settings=bad))
