@@ -55,11 +55,6 @@ MATRIX = {
     # C4-defaults and -orbit until then)
     "C4-independent": ({"spatial.reciprocal": False}, "none"),
     "C4-independent-orbit": ({"spatial.reciprocal": False}, "orbit"),
-    # temporal.history=temporal: the next frame reads the reservoirs after temporal reuse; one pass
-    # after it (the history's buffer reused), several (the spare buffer), a moving camera
-    "C4-history-temporal": ({"temporal.history": "temporal"}, "none"),
-    "C4-history-temporal-orbit": ({"temporal.history": "temporal"}, "orbit"),
-    "C4-history-temporal-passes-3": ({"temporal.history": "temporal", "spatial.rounds": 2, "mcmc.steps": 1}, "none"),
     # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
     "C6-mcmc-z": ({**OFFICIAL, "mcmc.steps": 2}, "none"),
     "C6-mcmc-rc-prev": ({**OFFICIAL, "mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),

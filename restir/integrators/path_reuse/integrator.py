@@ -164,7 +164,7 @@ class PathReuseIntegrator(Integrator):
             self.di.resample_and_shade(frame, sample)
             direct = self.di.sample_L
         L = self.resample_sample(frame, sample, direct) if self.resamples else direct
-        self.end_reservoirs()
+        self.reservoirs.swap()
         self.swap_history()
         if self.di is not None:
             self.di.end_sample(camera)
@@ -176,11 +176,6 @@ class PathReuseIntegrator(Integrator):
         """The method's passes for one sample after the primary hits; the sample's radiance (a
         device array, one vec3 per pixel)."""
         raise NotImplementedError
-
-    def end_reservoirs(self) -> None:
-        """At the end of a sample: its final reservoirs become the history (ReSTIR PT may keep
-        earlier ones: temporal.history)."""
-        self.reservoirs.swap()
 
     def swap_history(self) -> None:
         """The method's own buffers that become history at the end of a sample (besides the path

@@ -18,7 +18,6 @@ from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from ..path_reuse.direct_light import DISettings, di_component
 from ..path_reuse.integrator import PathReuseIntegrator, PathReuseSettings
 from ..path_reuse.params import PathReuseParams
-from ..path_reuse.path_sample import PathReservoir
 from ..path_reuse.shift import MUTATIONS as SHIFT_MUTATIONS
 from ..path_reuse.shift import make_shift
 from .s1_initial import initial_kernel
@@ -54,7 +53,6 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
         make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
         make_reciprocal_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
-    "history_unkept": None,  # temporal.history=temporal without the spare: a second pass overwrites the history
 })
 
 
@@ -74,11 +72,6 @@ class PTSettings(PathReuseSettings):
                           "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings; the "
                           "official ReSTIR PT's choice)")
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
-    temporal_history: str = setting("temporal.history", "final", "what the next frame's temporal reuse reads: final "
-                                    "(the reservoirs after every pass, the official choice) or temporal (the "
-                                    "reservoirs after temporal reuse, before MCMC and spatial reuse: a sample "
-                                    "copied to neighbours in one frame is not copied on from there in the next; "
-                                    "with more than one pass after it, +76 B per pixel)")
     temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x; the official value is 20)")
     mcmc_start: str = setting("mcmc.start", "z", "where an MCMC mutation redraws the path: z (after the reconnection "
@@ -118,10 +111,6 @@ class ReSTIRPT(PathReuseIntegrator):
             raise ConfigError(f"mcmc.steps must be in [0, {PT_MAX_MCMC_STEPS}]")
         if settings.mcmc_start not in ("z", "rc_prev"):
             raise ConfigError("mcmc.start must be z or rc_prev")
-        if settings.temporal_history not in ("final", "temporal"):
-            raise ConfigError("temporal.history must be final or temporal")
-        if settings.temporal_history == "temporal" and settings.stages_split:
-            raise ConfigError("temporal.history=temporal runs with the fused pipeline, not stages.split")
         if settings.stages_split and MUTATIONS.builds_kernels(settings.debug_mutation):
             raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
@@ -135,19 +124,8 @@ class ReSTIRPT(PathReuseIntegrator):
         history's buffer (path_reuse/integrator.py)."""
         return bool(self.settings.stages_split)
 
-    def passes_after_temporal(self) -> int:
-        s = self.settings
-        return int(s.mcmc_steps > 0) + s.spatial.rounds
-
     def allocate(self) -> None:
         self.allocate_path_reuse()
-        # temporal.history=temporal: the buffer the trace + temporal kernel wrote is the next
-        # frame's history, so no pass after it may write there. One pass writes into the old
-        # history's buffer (read by then); a second needs a spare.
-        self.kept = None
-        self.spare = None
-        if self.settings.temporal_history == "temporal" and self.passes_after_temporal() > 1:
-            self.spare = self.buffer(f"{self.RESERVOIRS}_spare", PathReservoir)
         # a round's pairings for spatial.reciprocal (16 B per neighbour, not per pixel)
         self.pairings = wp.zeros(PT_MAX_NEIGHBORS, dtype=wp.vec4i, device=self.device)
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
@@ -176,8 +154,6 @@ class ReSTIRPT(PathReuseIntegrator):
                            [res.current, self.shift_events])
             if temporal:
                 self.count_shifts("temporal")
-        if self.settings.temporal_history == "temporal":
-            self.kept = res.current
         if self.settings.mcmc_steps > 0:
             self.reuse_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
                                            int(self.settings.mcmc_start == "rc_prev"), gb.current], counts=("mcmc",))
@@ -195,27 +171,6 @@ class ReSTIRPT(PathReuseIntegrator):
                        [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
         self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins
         return self.sample_L
-
-    def reuse_pass(self, stage: str, kernel, inputs: list, in_place: bool = False, counts: tuple | None = None,
-                   parts: int | None = None, scratch: tuple = ()) -> None:
-        """The ping-pong pass, kept off the history's buffer: once the kept reservoirs (temporal.history
-        = temporal) are the history, the pass writes into the spare and the two buffers it rotates
-        through are the spare and the one the pass before wrote."""
-        if (self.kept is not None and self.pass_out is None and self.reservoirs.previous is self.kept
-                and self.settings.debug_mutation != "history_unkept"):
-            self.pass_out = self.spare
-        super().reuse_pass(stage, kernel, inputs, in_place, counts, parts, scratch)
-
-    def end_reservoirs(self) -> None:
-        """temporal.history=temporal: the kept reservoirs become the history. They are already in
-        the history's place when a pass ran after them; without one they are the final ones."""
-        if self.kept is not None:
-            kept, self.kept = self.kept, None
-            if self.pass_out is not None:  # the buffer the passes left free is the next spare
-                self.spare, self.pass_out = self.pass_out, None
-            if self.reservoirs.previous is kept:
-                return
-        self.reservoirs.swap()
 
     def take_tally(self, key, sums: np.ndarray) -> None:
         if key[0] == "origins":
