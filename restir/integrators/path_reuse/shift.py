@@ -324,10 +324,12 @@ def make_shift(mutation: str = "none", inline: bool = False):
 
 
 shift_path = make_shift()
-# ReSTIR PT's reuse passes call the shift inlined: out of line, every call copies its arguments
-# (Warp passes structs by value: SceneDevice alone is 1152 B) and the compiler cannot specialise it
-# to the call site. Inlined, the spatial pass took 0.7x as long and the frame 0.88x at 512x512
-# (BENCHMARKS.md, "The shift inlined"); the module takes longer to compile (CPU 21 -> 29 s, CUDA
-# 80 -> 118 s), so Suffix ReSTIR, whose gather makes many shifts, keeps the out-of-line build.
+# The reuse passes that shift in one or two places call the shift inlined (ReSTIR PT's temporal and
+# spatial kernels, Suffix ReSTIR's suffix temporal and spatial kernels): out of line, every call
+# copies its arguments (Warp passes structs by value: SceneDevice alone is 1152 B) and the compiler
+# cannot fit it to the call site. Inlined, ReSTIR PT's spatial pass took 0.7x as long and its
+# frame 0.88x at 512x512; Suffix ReSTIR's frame 0.96-0.98x (BENCHMARKS.md, "The shift inlined").
+# Each inlined copy lengthens the module's build (ReSTIR PT's CUDA build 80 -> 107 s, Suffix
+# ReSTIR's 80 -> 109 s), so the gather, which shifts in several places, keeps the out-of-line build.
 SHIFT_INLINED = make_shift(inline=True)
 replay_prefix = _replay_prefixes["none"]

@@ -31,7 +31,7 @@ from ..common.shading import load_shading
 from ..path_reuse.base_path import EVENTS_PER_PATH, BasePath, trace_base_path
 from ..path_reuse.path_sample import NO_RC, PathReservoir, empty_path, holds_path, rc_length, store
 from ..path_reuse.reuse_pair import make_reuse_pair
-from ..path_reuse.shift import shift_path
+from ..path_reuse.shift import SHIFT_INLINED
 from .domains import Domain, load_domain
 from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir, prefix_length
@@ -78,7 +78,7 @@ def make_suffix_kernel(mutation: str = "none"):
     rc_at_prefix = mutation == "rc_index_at_prefix_length"
     seed_not_reset = mutation == "suffix_seed_not_reset"
     thp_in_target = mutation == "prefix_thp_in_target"
-    _, _, temporal_pair, _ = make_reuse_pair(shift_path)
+    _, _, temporal_pair, _ = make_reuse_pair(SHIFT_INLINED)  # inlined: two calls (path_reuse/shift.py)
 
     @wp.kernel(module=module)
     def suffix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, prev_camera: Camera,

@@ -19,13 +19,13 @@ from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, spatial_neighbor
 from ..path_reuse.path_sample import PathReservoir, store
 from ..path_reuse.reuse_pair import make_reuse_pair, spatial_canonical, spatial_start
-from ..path_reuse.shift import shift_path
+from ..path_reuse.shift import SHIFT_INLINED
 from .domains import load_domain
 from .params import KERNEL_MODULE, SRParams
 from .prefix import PrefixReservoir
 
 
-def make_suffix_spatial_kernel(shift=shift_path, module=None):
+def make_suffix_spatial_kernel(shift=SHIFT_INLINED, module=None):
     _, _, _, spatial_step = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
