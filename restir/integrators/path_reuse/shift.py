@@ -292,7 +292,8 @@ def make_shift(mutation: str = "none", inline: bool = False):
 
     # Out of line (CUDA __noinline__) in the default build: called from several places of one
     # kernel (Suffix ReSTIR's gather makes several shifts per gathered prefix), inlined copies made
-    # the CUDA build of a module take minutes. The inlined build is ReSTIR PT's (SHIFT_INLINED).
+    # the CUDA build of a module take minutes. The inlined build (SHIFT_INLINED) serves the kernels
+    # that shift in one or two places.
     @wp.func(module=module, inline=inline, name=named("path"))
     def shift_path(scene: SceneDevice, r: PathReservoir, dst: Domain) -> ShiftResult:
         """r's path moved into the domain dst (see the module docstring); invalid if it fails."""
