@@ -31,7 +31,7 @@ from restir.integrators.path_reuse.params import PathReuseParams
 from restir.integrators.path_reuse.path_sample import (NO_RC, RC_ENV, RC_SURFACE, PathReservoir, ends_with_nee,
                                                       holds_path, lobe_at_rc, lobe_at_rc_prev, path_length, rc_kind,
                                                       rc_length)
-from restir.integrators.path_reuse.shift import Replay, _replay_prefixes, make_shift, shift_path
+from restir.integrators.path_reuse.shift import SHIFT_INLINED, Replay, _replay_prefixes, make_shift, shift_path
 
 
 H = 4.0e-3
@@ -348,11 +348,17 @@ def describe(name, shift, o, rel):
 _round_trip_kernels = {}
 
 
-def round_trip_kernel(mutation: str = "none"):
-    """The test kernel over the shipped shift, or over a mutant's (TESTING.md 5.11)."""
-    if mutation not in _round_trip_kernels:
-        _round_trip_kernels[mutation] = make_round_trip_kernel(shift_path if mutation == "none" else make_shift(mutation))
-    return _round_trip_kernels[mutation]
+def round_trip_kernel(mutation: str = "none", inlined: bool = False):
+    """The test kernel over the shipped shift (its out-of-line build, or with `inlined` the build
+    the temporal and spatial passes call), or over a mutant's (TESTING.md 5.11)."""
+    key = (mutation, inlined)
+    if key not in _round_trip_kernels:
+        if mutation != "none":
+            shift = make_shift(mutation, inline=inlined)
+        else:
+            shift = SHIFT_INLINED if inlined else shift_path
+        _round_trip_kernels[key] = make_round_trip_kernel(shift)
+    return _round_trip_kernels[key]
 
 
 def make_round_trip_kernel(shift_path):
@@ -388,7 +394,7 @@ def make_round_trip_kernel(shift_path):
     return round_trip_kernel
 
 
-def run_round_trips(integ, p, gb, res, offset=3, mutation="none"):
+def run_round_trips(integ, p, gb, res, offset=3, mutation="none", inlined=False):
     """The round-trip kernel over every pixel of `integ` with partner pixel (x + offset, y):
     domains from the G-buffer `gb` (primary hits; for suffixes, the prefix ends), paths `res`."""
     n = integ.num_pixels
@@ -397,7 +403,7 @@ def run_round_trips(integ, p, gb, res, offset=3, mutation="none"):
     x, y = idx % w, idx // w
     partner = (y * w + np.where(x + offset < w, x + offset, x - offset)).astype(np.int32)
     out = wp.zeros((n, 11), dtype=float, device=integ.device)
-    wp.launch(round_trip_kernel(mutation), dim=n, inputs=[integ.dscene.scene, p, gb, res,
+    wp.launch(round_trip_kernel(mutation, inlined), dim=n, inputs=[integ.dscene.scene, p, gb, res,
                                                  wp.array(partner, dtype=int, device=integ.device), out],
               device=integ.device)
     return out.numpy()

@@ -8,6 +8,7 @@ paths of real scenes, calling the production shift (path_reuse/shift.py) from a 
 At most 0.2% outliers are allowed (grazing reconnections in float32), and every shift kind must
 actually succeed on a good share of the pixel pairs (a test of dead shifts is no test).
 """
+import numpy as np
 import pytest
 
 import restir
@@ -58,3 +59,16 @@ ROUND_TRIP_MUTANTS = [("misaligned_replay", "replay"), ("misaligned_replay", "hy
 def test_mutant_shifts_break_identity_or_round_trip(mutation, shift):
     with pytest.raises(AssertionError):
         check_identity_and_round_trip("builtin:indirect-room", shift, "pt", mutation)
+
+
+@pytest.mark.parametrize("shift", ["hybrid", "replay"])
+def test_inlined_shift_is_the_shift_bit_for_bit(shift):
+    """The shift's two builds (path_reuse/shift.py: out of line, and SHIFT_INLINED, which the
+    temporal and spatial passes call) compute the same numbers: the round-trip kernel over each,
+    on the same paths and pixel pairs, bit for bit (identity, forward and back shifts, J)."""
+    scene = restir.load_scene("builtin:indirect-room", width=32, height=32)
+    integ, res, gb = base_paths(scene, shift, "pt")
+    out = run_round_trips(integ, integ.params(0, 0), gb, res)
+    inlined = run_round_trips(integ, integ.params(0, 0), gb, res, inlined=True)
+    assert out[:, 6].sum() > 100  # forward shifts that succeed
+    assert np.array_equal(out, inlined)
