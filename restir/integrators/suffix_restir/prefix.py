@@ -190,7 +190,7 @@ class PrefixShift:
     rays: int
 
 
-@wp.func(inline=False)
+@wp.func(inline=True)  # two calls, both in the prefix stage: inlined, no copies of the scene
 def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: Shading, dst: Shading) -> PrefixShift:
     """Replay r's bounces 0..P-2 from dst with r's numbers, then reconnect the replayed x_{P-1}
     to r's end x_P (`end`). Fails when the replay breaks, when a replayed vertex would end the
