@@ -118,6 +118,13 @@ def make_reuse_pair(shift=shift_path, module=None):
     def named(fn: str):  # another shift's build gets keys of its own (one kernel module may hold two builds)
         return None if shift is shift_path else f"reuse_{fn}_{shift.key}"
 
+    # Around the inlined shift the spatial step is inlined too (a kernel calls it in one place, in
+    # its loop over neighbours): left out of line by the compiler, each neighbour copied the scene
+    # and both domains (Warp passes structs by value); inlined, Suffix ReSTIR's suffix spatial pass
+    # took 0.73x as long. Forcing the other three inline made ReSTIR PT's frame 5% slower
+    # (BENCHMARKS.md, "The shift inlined, and the shadow ray on three handles").
+    inline = True if getattr(shift, "inlined", False) else None
+
     @wp.func(module=module, name=named("shift_in"))
     def shift_in(scene: SceneDevice, r: PathReservoir, M_i: float, M_c: float, dc: Domain) -> ShiftedIn:
         out = ShiftedIn()
@@ -159,7 +166,7 @@ def make_reuse_pair(shift=shift_path, module=None):
             st.chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
         return st
 
-    @wp.func(module=module, name=named("spatial_neighbor"))
+    @wp.func(module=module, name=named("spatial_neighbor"), inline=inline)
     def spatial_neighbor(st: Reuse, scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, dn: Domain,
                          j: int, u: float) -> Reuse:
         """Neighbour j (sample r, domain dn, valid by geometry) into the pairwise resampling of c

@@ -318,6 +318,7 @@ def make_shift(mutation: str = "none", inline: bool = False):
         res.rays += y.rays
         return res
 
+    shift_path.inlined = inline  # make_reuse_pair inlines the spatial step around an inlined shift
     if not inline:
         _replay_prefixes[mutation] = replay_prefix
     _builds[mutation, inline] = shift_path
