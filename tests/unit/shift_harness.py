@@ -31,7 +31,7 @@ from restir.integrators.path_reuse.params import PathReuseParams
 from restir.integrators.path_reuse.path_sample import (NO_RC, RC_ENV, RC_SURFACE, PathReservoir, ends_with_nee,
                                                       holds_path, lobe_at_rc, lobe_at_rc_prev, path_length, rc_kind,
                                                       rc_length)
-from restir.integrators.path_reuse.shift import SHIFT_INLINED, Replay, _replay_prefixes, make_shift, shift_path
+from restir.integrators.path_reuse.shift import Replay, _replay_prefixes, make_shift, shift_path
 
 
 H = 4.0e-3
@@ -352,12 +352,8 @@ def round_trip_kernel(mutation: str = "none", inlined: bool = False):
     """The test kernel over the shipped shift (its out-of-line build, or with `inlined` the build
     the temporal and spatial passes call), or over a mutant's (TESTING.md 5.11)."""
     key = (mutation, inlined)
-    if key not in _round_trip_kernels:
-        if mutation != "none":
-            shift = make_shift(mutation, inline=inlined)
-        else:
-            shift = SHIFT_INLINED if inlined else shift_path
-        _round_trip_kernels[key] = make_round_trip_kernel(shift)
+    if key not in _round_trip_kernels:  # make_shift returns the shipped builds for "none"
+        _round_trip_kernels[key] = make_round_trip_kernel(make_shift(mutation, inline=inlined))
     return _round_trip_kernels[key]
 
 

@@ -126,13 +126,20 @@ def consider(s: Slots, n: int, search: SearchStructure, x: wp.vec3, count: int) 
 
 
 @wp.func
+def outside_box(c: wp.vec3, h: float, x: wp.vec3) -> bool:
+    """x lies outside the box of centre c and half-size h."""
+    d = c - x
+    return wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) > h
+
+
+@wp.func
 def consider_box(s: Slots, n: int, c: wp.vec3, h: float, x: wp.vec3, count: int) -> Slots:
     """s with pixel n (box: centre c, half-size h) inserted in distance order if its box holds x
     within the half-diagonal."""
     out = s
-    d = c - x
-    if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) > h:
+    if outside_box(c, h, x):
         return out
+    d = c - x
     d2 = wp.length_sq(d)
     if d2 <= 0.0 or d2 >= 3.0 * h * h or d2 >= out.d2[count - 1]:
         return out
@@ -230,8 +237,7 @@ def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -
             e = search.entries[i]
             # the box test first, here: most candidates fail it (45 a query, 7 boxes holding x, on
             # the Cornell box), and a call to consider_box copies the slots in and out
-            d = e.c - x
-            if wp.max(wp.abs(d[0]), wp.max(wp.abs(d[1]), wp.abs(d[2]))) > e.h:
+            if outside_box(e.c, e.h, x):
                 continue
             out = consider_box(out, e.pixel, e.c, e.h, x, count)
     return out
