@@ -87,7 +87,7 @@ def query_ms(scene, size, max_depth, settings=None):
         sc = load_shading(scene, gb, pixel)
         if sc.valid != 0:
             pf = trace_prefix(scene, params, sc, hash_combine(rng_key(wp.uint32(3), wp.uint32(5), wp.uint32(7),
-                                                                      wp.uint32(pixel)), wp.uint32(0)))
+                                                                      wp.uint32(pixel)), wp.uint32(0)), False)
             if pf.valid != 0:
                 points[pixel] = pf.hit.p
 

@@ -56,7 +56,7 @@ def make_kernel(gather):
         if sc.valid == 0:
             return
         key = rng_key(params.pt.seed, wp.uint32(77), wp.uint32(3), wp.uint32(pixel))
-        pf = trace_prefix(scene, params, sc, hash_combine(key, wp.uint32(0)))
+        pf = trace_prefix(scene, params, sc, hash_combine(key, wp.uint32(0)), False)
         if pf.valid == 0:
             return
         dst = Domain()

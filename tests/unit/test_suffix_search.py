@@ -32,7 +32,7 @@ def query_kernel(scene: SceneDevice, params: SRParams, gb: GBuffer, search: Sear
     if sc.valid == 0:
         return
     pf = trace_prefix(scene, params, sc, hash_combine(rng_key(wp.uint32(9), wp.uint32(1), wp.uint32(2),
-                                                              wp.uint32(pixel)), wp.uint32(0)))
+                                                              wp.uint32(pixel)), wp.uint32(0)), False)
     if pf.valid == 0:
         return
     points[pixel] = pf.hit.p

@@ -64,8 +64,12 @@ class Prefix:
 # inlined the frame is 4% cheaper, the CUDA build no slower (BENCHMARKS.md, "The shift inlined, and
 # the shadow ray on three handles").
 @wp.func(inline=True)
-def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uint32) -> Prefix:
-    """Trace from the primary hit x0 with the key `seed` until the prefix end (or the path's end)."""
+def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uint32, with_internal: bool) -> Prefix:
+    """Trace from the primary hit x0 with the key `seed` until the prefix end (or the path's end);
+    with_internal: also sum its internal events (the gather's prefixes). The prefix stage's fresh
+    prefix goes without them (only its end and throughput are resampled; its light was a shadow
+    ray a pixel, thrown away): the bounces' numbers are their own dimensions, so the path is the
+    same either way."""
     out = Prefix()
     hit = x0.hit
     mat = x0.mat
@@ -75,7 +79,7 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
     out.footprint = x0.hit.t
     k = int(0)
     while k + 2 <= params.pt.max_depth:
-        if k >= params.pt.first_event and bsdf_is_delta_only(mat) == 0:
+        if with_internal and k >= params.pt.first_event and bsdf_is_delta_only(mat) == 0:
             c = nee_at(scene, hit, mat, frame, wi, seed, wp.uint32(0), k, 1, STRATEGY_MIS)
             out.rays += c.rays
             out.internal += wp.cw_mul(beta, c.L)
@@ -89,7 +93,7 @@ def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uin
         nh = trace_closest(scene, sc.o, sc.d, T_MAX)
         out.rays += 1
         fd = found_along(scene, hit, nh, sc.d)
-        if k >= params.pt.first_event and max3(fd.Le) > 0.0:  # emission found from x_k: length k < P
+        if with_internal and k >= params.pt.first_event and max3(fd.Le) > 0.0:  # emission from x_k: length k < P
             out.internal += wp.cw_mul(beta, fd.Le) * emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, fd.p_light, 1,
                                                                          STRATEGY_MIS)
         if fd.is_env != 0:

@@ -61,7 +61,7 @@ def fresh_prefix(scene: SceneDevice, params: SRParams, sh: Shading, pixel: int) 
         return f
     key = hash_combine(rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_PREFIX), wp.uint32(pixel)),
                        wp.uint32(params.pt.sample))
-    p = trace_prefix(scene, params, sh, key)
+    p = trace_prefix(scene, params, sh, key, False)
     f.rays = p.rays
     f.r.M = 1.0
     if p.valid != 0:

@@ -182,7 +182,7 @@ def make_gather(shift=shift_path, module=None, mutation: str = "none"):
             total = wp.vec3(0.0)
             for i in range(N):
                 path_id = wp.uint32(params.pt.sample * SR_MAX_GATHER_PREFIXES + i)
-                pf = trace_prefix(scene, params, sc, hash_combine(prefix_key, path_id))
+                pf = trace_prefix(scene, params, sc, hash_combine(prefix_key, path_id), True)
                 tl.rays += pf.rays
                 total += pf.internal
                 if pf.valid == 0:
