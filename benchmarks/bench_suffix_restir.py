@@ -76,7 +76,7 @@ def query_ms(scene, size, max_depth, settings=None):
     from restir.integrators.common.shading import load_shading
     from restir.integrators.suffix_restir.params import SRParams
     from restir.integrators.suffix_restir.prefix import trace_prefix
-    from restir.integrators.suffix_restir.s2_search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_slots,
+    from restir.integrators.suffix_restir.s2_search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_cell, grid_slot,
                                                          nearest_prefix_ends)
     from restir.parallel import launch_pixels
 
@@ -122,12 +122,16 @@ def query_ms(scene, size, max_depth, settings=None):
             v = int(0)
             k = int(0)
             if search.kind == SEARCH_GRID:
-                cells = grid_slots(search, x)
-                for j in range(cells.count):
-                    run = search.ranges[cells.slot[j]]
-                    for i in range(run[0], run[1]):
-                        v += 1
-                        k += holds_box(search.entries[i].c, search.entries[i].h, x)
+                lo = grid_cell(search, x - wp.vec3(search.radius))
+                hi = grid_cell(search, x + wp.vec3(search.radius))
+                for cz in range(lo[2], hi[2] + 1):
+                    for cy in range(lo[1], hi[1] + 1):
+                        for cx in range(lo[0], hi[0] + 1):
+                            run = search.ranges[grid_slot(search, wp.vec3i(cx, cy, cz))]
+                            for i in range(run[0], run[1]):
+                                v += 1
+                                e = search.entries[i]
+                                k += holds_box(wp.vec3(e[0], e[1], e[2]), e[3], x)
             elif search.kind == SEARCH_BVH:
                 q = wp.bvh_query_aabb(search.id, x, x)
                 while wp.bvh_query_next(q, n):

@@ -27,7 +27,7 @@ from .s1_prefix import prefix_kernel
 from .s3_suffix import SUFFIX_MUTATIONS, make_suffix_kernel, suffix_kernel
 from .s4_suffix_spatial import suffix_spatial_kernel
 from .s5_gather import GATHER_MUTATIONS, gather_kernel, make_gather
-from .s2_search import SEARCHES, GridEntry, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
+from .s2_search import SEARCHES, SearchStructure, boxes_kernel, grid_keys_kernel, grid_order_kernel
 
 def _suffix_mutant(mutation: str) -> tuple:
     return make_suffix_kernel(mutation), gather_kernel
@@ -190,12 +190,12 @@ class SuffixReSTIR(PathReuseIntegrator):
             self.search.centers = wp.zeros(0, dtype=wp.vec3, device=self.device)
             self.search.keys = self.buffer("search.grid_keys", wp.int32, 2 * n)
             self.search.ids = self.buffer("search.grid_ids", wp.int32, 2 * n)
-            self.search.entries = self.buffer("search.grid_entries", GridEntry)
+            self.search.entries = self.buffer("search.grid_entries", wp.vec4)
             self.search.ranges = self.buffer("search.grid_table", wp.vec2i, table)
             self.search.mask = table - 1
         else:
             self.search.centers = self.buffer("search.centers", wp.vec3)
-            for name, dtype in (("keys", wp.int32), ("ids", wp.int32), ("entries", GridEntry), ("ranges", wp.vec2i)):
+            for name, dtype in (("keys", wp.int32), ("ids", wp.int32), ("entries", wp.vec4), ("ranges", wp.vec2i)):
                 setattr(self.search, name, wp.zeros(0, dtype=dtype, device=self.device))
         self.structure = None
         self.gather_slots = self.buffer("gather_slots", PassCounts)

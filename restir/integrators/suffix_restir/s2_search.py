@@ -41,16 +41,6 @@ SEARCH_HASHGRID = wp.constant(0)
 SEARCH_BVH = wp.constant(1)
 SEARCH_GRID = wp.constant(2)
 SEARCHES = {"grid": SEARCH_GRID, "hashgrid": SEARCH_HASHGRID, "bvh": SEARCH_BVH}
-cells8 = wp.types.vector(length=8, dtype=wp.int32)
-
-
-@wp.struct
-class GridEntry:
-    """A box in the sorted grid's order, with its pixel: one record, so that a candidate costs
-    no read elsewhere."""
-    c: wp.vec3
-    h: float
-    pixel: int
 
 
 @wp.struct
@@ -66,7 +56,7 @@ class SearchStructure:
     mask: int
     keys: wp.array(dtype=wp.int32)
     ids: wp.array(dtype=wp.int32)
-    entries: wp.array(dtype=GridEntry)
+    entries: wp.array(dtype=wp.vec4)   # the boxes in slot order, (centre, half-size): one aligned 16-byte read a candidate
     ranges: wp.array(dtype=wp.vec2i)
 
 
@@ -143,6 +133,9 @@ def consider_box(s: Slots, n: int, c: wp.vec3, h: float, x: wp.vec3, count: int)
     d2 = wp.length_sq(d)
     if d2 <= 0.0 or d2 >= 3.0 * h * h or d2 >= out.d2[count - 1]:
         return out
+    for k in range(count):  # two cells of one table slot visit its run twice
+        if out.pixel[k] == n:
+            return out
     m = count - 1
     while m > 0 and out.d2[m - 1] > d2:
         out.d2[m] = out.d2[m - 1]
@@ -191,56 +184,39 @@ def grid_slot(search: SearchStructure, c: wp.vec3i) -> int:
     return int(h & wp.uint32(search.mask))
 
 
-@wp.struct
-class GridSlots:
-    """The distinct table slots of the cells overlapping [x - r, x + r]^3 (at most 2 x 2 x 2:
-    cells are 2.02 r wide), and how many."""
-    slot: cells8
-    count: int
-
-
 @wp.func
-def grid_slots(search: SearchStructure, x: wp.vec3) -> GridSlots:
-    """The slots a query at x reads, each once (two cells can share a slot)."""
-    out = GridSlots()
-    out.slot = cells8(-1)
+def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
+    """s with every box of the cells overlapping [x - r, x + r]^3 considered (at most 2 x 2 x 2:
+    cells are 2.02 r wide). Two cells that share a table slot read its run twice; consider_box
+    keeps a pixel once. (Slots deduplicated first, or cells half or a third as wide with up to
+    27 lookups, or runs sorted by x with a binary search: all slower, BENCHMARKS.md.)"""
+    out = s
     lo = grid_cell(search, x - wp.vec3(search.radius))
     hi = grid_cell(search, x + wp.vec3(search.radius))
     for cz in range(lo[2], hi[2] + 1):
         for cy in range(lo[1], hi[1] + 1):
             for cx in range(lo[0], hi[0] + 1):
-                slot = grid_slot(search, wp.vec3i(cx, cy, cz))
-                again = bool(False)
-                for k in range(out.count):
-                    if out.slot[k] == slot:
-                        again = True
-                if not again and out.count < 8:
-                    out.slot[out.count] = slot
-                    out.count += 1
+                run = search.ranges[grid_slot(search, wp.vec3i(cx, cy, cz))]
+                i = next_holding(search, run[0], run[1], x)
+                while i < run[1]:
+                    e = search.entries[i]
+                    out = consider_box(out, search.ids[i], wp.vec3(e[0], e[1], e[2]), e[3], x, count)
+                    i = next_holding(search, i + 1, run[1], x)
     return out
 
 
 @wp.func
-def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -> Slots:
-    """s with every box of the slots of x considered. The slots' ranges are read first, all of
-    them before any run: independent reads the CPU can overlap."""
-    out = s
-    g = grid_slots(search, x)
-    starts = cells8(0)
-    ends = cells8(0)
-    for k in range(g.count):
-        run = search.ranges[g.slot[k]]
-        starts[k] = run[0]
-        ends[k] = run[1]
-    for k in range(g.count):
-        for i in range(starts[k], ends[k]):
-            e = search.entries[i]
-            # the box test first, here: most candidates fail it (45 a query, 7 boxes holding x, on
-            # the Cornell box), and a call to consider_box copies the slots in and out
-            if outside_box(e.c, e.h, x):
-                continue
-            out = consider_box(out, e.pixel, e.c, e.h, x, count)
-    return out
+def next_holding(search: SearchStructure, start: int, end: int, x: wp.vec3) -> int:
+    """The first entry in [start, end) whose box holds x (end if none). Its own loop: most
+    candidates fail the box test (45 a query, 7 boxes holding x, on the Cornell box), and a loop
+    that carried the slots (68 bytes) copied them at every candidate."""
+    i = start
+    while i < end:
+        e = search.entries[i]
+        if not outside_box(wp.vec3(e[0], e[1], e[2]), e[3], x):
+            return i
+        i += 1
+    return end
 
 
 @wp.kernel(module=KERNEL_MODULE)
@@ -259,19 +235,18 @@ def grid_keys_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search
 
 @wp.kernel(module=KERNEL_MODULE)
 def grid_order_kernel(offset: int, scene: SceneDevice, prefix_gb: GBuffer, search: SearchStructure, count: int,
-                      entries: wp.array(dtype=GridEntry), ranges: wp.array(dtype=wp.vec2i),
+                      entries: wp.array(dtype=wp.vec4), ranges: wp.array(dtype=wp.vec2i),
                       events: wp.array(dtype=EventCounts)):
     """Reads: the sorted slots and pixels, the boxes' half-sizes, the prefix ends. Writes: the entries in sorted order,
     and where a slot's run begins or ends, that bound of its range (the table was zeroed before:
     empty slots keep the empty range)."""
     i = wp.tid() + offset
     n = search.ids[i]
-    e = GridEntry()
-    e.h = search.halves[n]
-    if e.h > 0.0:
-        e.c = box_center(scene, prefix_gb, n)
-    e.pixel = n
-    entries[i] = e
+    h = search.halves[n]
+    c = wp.vec3(0.0)
+    if h > 0.0:
+        c = box_center(scene, prefix_gb, n)
+    entries[i] = wp.vec4(c[0], c[1], c[2], h)
     slot = search.keys[i]
     if slot <= search.mask:
         if i == 0 or search.keys[i - 1] != slot:
