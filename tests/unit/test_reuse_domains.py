@@ -10,25 +10,49 @@ from restir.device.camera import Camera, generate_ray
 from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reciprocal_pairing,
                                                      reciprocal_partner, reproject, resolve_spatial_radius,
                                                      spatial_neighbor, spatial_radius_for)
+from restir.scene.transforms import rotate
 from restir.scene.upload import DeviceScene
 
 
 @wp.kernel
-def reproject_kernel(cam: Camera, depth: float, out: wp.array(dtype=wp.int32)):
+def reproject_kernel(cam: Camera, prev: Camera, depth: float, u: wp.vec2, out: wp.array(dtype=wp.int32)):
     pixel = wp.tid()
-    # a point seen through the pixel, anywhere inside it (filter offsets within +-0.4 px)
-    ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, wp.vec2(0.3, 0.7))
-    out[pixel] = reproject(cam, ray.o + ray.d * depth)
+    # a point seen through the pixel at the filter offset drawn from u
+    ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, u)
+    out[pixel] = reproject(cam, prev, pixel, ray.o + ray.d * depth)
 
 
-def test_reprojection_finds_the_pixel_that_saw_a_point(device):
+def test_reprojection_under_a_still_camera_is_the_pixel_itself(device):
+    """Whatever the primary ray's filter offset, also one that reaches into a neighbouring pixel
+    (the tent filter's offsets reach +-1 px): a pixel's history is its own."""
     scene = restir.load_scene("builtin:cornell-box", width=40, height=30)
     cam = DeviceScene(scene, device).camera
     out = wp.zeros(40 * 30, dtype=wp.int32, device=device)
-    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, 500.0, out], device=device)
-    np.testing.assert_array_equal(out.numpy(), np.arange(40 * 30))
-    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, -500.0, out], device=device)  # behind the camera
-    assert np.all(out.numpy() == NO_PIXEL)
+    for u in ((0.3, 0.7), (0.02, 0.97), (0.99, 0.01)):
+        wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, cam, 500.0, wp.vec2(*u), out], device=device)
+        np.testing.assert_array_equal(out.numpy(), np.arange(40 * 30))
+
+
+def test_reprojection_follows_the_motion_of_the_hit(device):
+    """The camera turned by about 3 pixels: each pixel's history is the pixel that its primary
+    hit's motion leads to (the same offset for every pixel of a distant point, up to 1 px of
+    perspective), off-screen ones NO_PIXEL; a point behind the previous camera has none."""
+    scene = restir.load_scene("builtin:cornell-box", width=40, height=30)
+    moved = restir.load_scene("builtin:cornell-box", width=40, height=30)
+    fov = 2.0 * np.degrees(np.arctan(scene.camera.tan_half()[1]))
+    moved.camera.to_world = scene.camera.to_world @ rotate((0, 1, 0), 3.0 * fov / 30.0)
+    cam, prev = DeviceScene(scene, device).camera, DeviceScene(moved, device).camera
+    out = wp.zeros(40 * 30, dtype=wp.int32, device=device)
+    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, prev, 500.0, wp.vec2(0.02, 0.97), out], device=device)
+    got = out.numpy().reshape(30, 40)
+    on = got != NO_PIXEL
+    dx = (got % 40 - np.arange(40)[None, :])[on]
+    dy = (got // 40 - np.arange(30)[:, None])[on]
+    assert on.sum() > 30 * 30 and set(np.unique(dy)) <= {-1, 0, 1}
+    assert 2 <= abs(np.median(dx)) <= 4 and np.ptp(dx) <= 2
+    assert np.all(~on[:, :2]) or np.all(~on[:, -2:])  # the columns that left the screen
+    wp.launch(reproject_kernel, dim=40 * 30, inputs=[cam, prev, -500.0, wp.vec2(0.3, 0.7), out], device=device)
+    assert np.all(out.numpy() == NO_PIXEL)  # behind the camera
 
 
 @wp.kernel

@@ -19,13 +19,24 @@ REFERENCE_LINES = 1080.0
 MIN_SPATIAL_RADIUS = 2.0  # below 1.5 px most offsets round to the pixel itself (BENCHMARKS.md)
 
 @wp.func
-def reproject(prev_camera: Camera, p: wp.vec3) -> int:
-    """The previous camera's pixel whose centre region contains world point p (the pixel that
-    saw p last frame, for a static scene); NO_PIXEL when p was behind that camera or off screen."""
-    xy = project_to_pixel(prev_camera, p)
-    qx = int(wp.floor(xy[0]))
-    qy = int(wp.floor(xy[1]))
-    if xy[0] < 0.0 or xy[1] < 0.0 or qx >= prev_camera.width or qy >= prev_camera.height:
+def reproject(camera: Camera, prev_camera: Camera, pixel: int, p: wp.vec3) -> int:
+    """The previous frame's pixel of `pixel`, whose primary hit this frame is p (a static scene):
+    the pixel moved by p's motion on screen (its position under the previous camera less its
+    position under this one); NO_PIXEL when p was behind that camera or the moved pixel is off
+    screen. Not the pixel whose square holds p under the previous camera: the primary ray's
+    filter offset reaches into the neighbouring pixels (a tent or Gaussian filter), so a pixel's
+    history would come from a neighbour in a third of the frames even under a still camera, and
+    the samples would wander between pixels, frame after frame: an error correlated between
+    neighbours that the denoiser keeps (BENCHMARKS.md, "The temporal history of the pixel itself")."""
+    cur = project_to_pixel(camera, p)
+    prev = project_to_pixel(prev_camera, p)
+    if prev[0] == -1.0 and prev[1] == -1.0:  # project_to_pixel's answer for a point behind the camera
+        return NO_PIXEL
+    x = float(pixel % camera.width) + 0.5 + (prev[0] - cur[0])
+    y = float(pixel // camera.width) + 0.5 + (prev[1] - cur[1])
+    qx = int(wp.floor(x))
+    qy = int(wp.floor(y))
+    if x < 0.0 or y < 0.0 or qx >= prev_camera.width or qy >= prev_camera.height:
         return NO_PIXEL
     return qy * prev_camera.width + qx
 
@@ -90,11 +101,12 @@ class Neighbor:
 
 
 @wp.func(inline=True)  # as load_shading: out of line it copies SceneDevice and a Shading
-def temporal_neighbor(scene: SceneDevice, prev_camera: Camera, prev_gb: GBuffer, sc: Shading) -> Neighbor:
-    """The temporal technique of a pixel with primary hit sc: the previous frame's pixel that saw
-    the same point, if it had a primary hit there and the two surfaces are similar."""
+def temporal_neighbor(scene: SceneDevice, camera: Camera, prev_camera: Camera, prev_gb: GBuffer, sc: Shading,
+                      pixel: int) -> Neighbor:
+    """The temporal technique of `pixel`, with primary hit sc: its previous frame's pixel
+    (`reproject`), if that had a primary hit and the two surfaces are similar."""
     n = Neighbor()
-    n.pixel = reproject(prev_camera, sc.hit.p)
+    n.pixel = reproject(camera, prev_camera, pixel, sc.hit.p)
     if n.pixel != NO_PIXEL:
         n.sh = load_shading(scene, prev_gb, n.pixel)
         if n.sh.valid == 0 or not similar_surfaces(sc, n.sh):

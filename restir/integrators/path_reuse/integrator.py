@@ -98,6 +98,7 @@ class PathReuseIntegrator(Integrator):
         self.shift_events = self.buffer("shift_events", PassCounts)
         self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
         self.prev_camera = None
+        self.current_camera = self.dscene.camera  # the camera of the sample being rendered
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
         self.di = attach_direct_light(self)
         # the first vertex whose events the method resamples; paths need max_depth >= first + 2
@@ -156,6 +157,9 @@ class PathReuseIntegrator(Integrator):
         """The primary hits and the direct light (ReSTIR DI, or the emission seen directly), the
         method's resampling passes and output (`resample_sample`), then this sample's final
         reservoirs and primary hits become the next one's history."""
+        self.current_camera = camera
+        if self.di is not None:
+            self.di.current_camera = camera
         trace_primary_hits(self, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame), sample,
                            int(bool(self.settings.hide_emitters)), self.gbuffers.current, self.primary_weight,
                            self.emission)

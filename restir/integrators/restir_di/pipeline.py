@@ -115,6 +115,7 @@ class ReSTIRDI(Integrator):
         # passes write into the history's buffer (Integrator.reuse_pass)
         self.pass_out = self.buffer("reservoirs_pass", DIReservoir) if self.settings.stages_split else None
         self.prev_camera = None
+        self.current_camera = self.dscene.camera  # the camera of the sample being rendered
         self.sample_L = self.buffer("sample_L", wp.vec3)
 
     def params(self, frame: int, sample: int) -> DIParams:
@@ -152,9 +153,10 @@ class ReSTIRDI(Integrator):
                 self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
             if temporal:
                 self.reuse_pass("temporal", temporal_kernel,
-                                [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+                                [sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
+                                 res.previous])
         else:
-            self.run_stage("initial_temporal", initial_temporal, [sc, p, int(temporal),
+            self.run_stage("initial_temporal", initial_temporal, [sc, p, int(temporal), self.current_camera,
                                                                   self.prev_camera or self.dscene.camera, gb.current,
                                                                   gb.previous, res.previous], [res.current])
         for rd in range(self.settings.spatial.rounds):
@@ -170,6 +172,7 @@ class ReSTIRDI(Integrator):
         self.prev_camera = camera
 
     def render_sample(self, frame: int, sample: int, camera):
+        self.current_camera = camera
         self.trace_primary(frame, sample, camera)
         self.resample_and_shade(frame, sample)
         self.end_sample(camera)

@@ -58,13 +58,13 @@ def make_temporal_reuse(skip_zero_canonical: bool = False, overweight_history: b
         return _built[skip_zero_canonical, overweight_history]
 
     @wp.func(module=_mutant_module(skip_zero_canonical, overweight_history))
-    def temporal_reuse(scene: SceneDevice, params: DIParams, prev_camera: Camera, prev_gb: GBuffer,
+    def temporal_reuse(scene: SceneDevice, params: DIParams, camera: Camera, prev_camera: Camera, prev_gb: GBuffer,
                        prev_reservoirs: wp.array(dtype=DIReservoir), c: DIReservoir, sc: Shading, pixel: int):
         none = wp.vec4i(0)
         if sc.valid == 0:
             return c, none
         # ---- the temporal technique: where this hit was seen last frame (geometry only)
-        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
             return c, none
         q = nq.pixel
@@ -104,12 +104,12 @@ temporal_reuse = make_temporal_reuse()
 
 
 @wp.kernel(module=SPLIT_MODULE)
-def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, prev_camera: Camera, gb: GBuffer,
+def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, camera: Camera, prev_camera: Camera, gb: GBuffer,
                     prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=DIReservoir),
                     reservoirs: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
                     events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
-    r, ev = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
+    r, ev = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
                            load_shading(scene, gb, pixel), pixel)
     reservoirs_out[pixel] = r
     events[pixel] = packed_events(ev)
@@ -122,7 +122,7 @@ def make_initial_temporal_kernel(skip_zero_canonical: bool = False, overweight_h
 
     @wp.kernel(module=_mutant_module(skip_zero_canonical, overweight_history))
     def initial_temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, temporal: int,
-                                prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
+                                camera: Camera, prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
                                 prev_reservoirs: wp.array(dtype=DIReservoir),
                                 reservoirs: wp.array(dtype=DIReservoir), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
@@ -132,7 +132,7 @@ def make_initial_temporal_kernel(skip_zero_canonical: bool = False, overweight_h
             c, ev_v = visible_reservoir(scene, sc, c)
             ev = ev + ev_v
         if temporal != 0:
-            c, ev_t = reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
+            c, ev_t = reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
         events[pixel] = packed_events(ev)

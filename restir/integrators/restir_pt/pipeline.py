@@ -146,11 +146,13 @@ class ReSTIRPT(PathReuseIntegrator):
             self.run_stage("trace_initial", initial_kernel, [sc, p, gb.current], [res.current])
             if temporal:
                 self.reuse_pass("temporal", temporal_kernel,
-                                [sc, p, self.prev_camera, gb.current, gb.previous, res.previous])
+                                [sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
+                                 res.previous])
         else:
             prev_camera = self.prev_camera or self.dscene.camera  # unread without temporal reuse
             self.run_stage("trace_temporal", trace_temporal,
-                           [sc, p, int(temporal), prev_camera, gb.current, gb.previous, res.previous],
+                           [sc, p, int(temporal), self.current_camera, prev_camera, gb.current, gb.previous,
+                            res.previous],
                            [res.current, self.shift_events])
             if temporal:
                 self.count_shifts("temporal")

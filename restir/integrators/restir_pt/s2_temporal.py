@@ -51,12 +51,12 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.func(module=module or KERNEL_MODULE)
-    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, prev_gb: GBuffer,
+    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera, prev_gb: GBuffer,
                        prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir, sc: Shading, pixel: int):
         none = wp.vec4i(0)
         if sc.valid == 0:
             return c, none, none
-        nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+        nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
             return c, none, none
         q = nq.pixel
@@ -82,12 +82,13 @@ def make_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=
     temporal_reuse = make_temporal_reuse(shift, drop_failed, module)
 
     @wp.kernel(module=module or SPLIT_MODULE)
-    def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, prev_camera: Camera, gb: GBuffer,
+    def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
+                        gb: GBuffer,
                         prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                         shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
-        r, n, ev = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
+        r, n, ev = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
                                   load_shading(scene, gb, pixel), pixel)
         reservoirs_out[pixel] = r
         shifts[pixel] = packed_counts(n)
@@ -105,7 +106,7 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
 
     @wp.kernel(module=module or KERNEL_MODULE)
     def trace_temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, temporal: int,
-                              prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
+                              camera: Camera, prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
                               prev_reservoirs: wp.array(dtype=PathReservoir),
                               reservoirs: wp.array(dtype=PathReservoir), shifts: wp.array(dtype=PassCounts),
                               events: wp.array(dtype=EventCounts)):
@@ -114,7 +115,7 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
         c, ev = initial(scene, params, sc, pixel)
         n = wp.vec4i(0)
         if temporal != 0:
-            c, n, ev_t = temporal_reuse(scene, params, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
+            c, n, ev_t = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
         shifts[pixel] = packed_counts(n)

@@ -282,14 +282,16 @@ class SuffixReSTIR(PathReuseIntegrator):
         history = self.prev_camera is not None
         # ---- prefixes: fresh, resampled with the previous frame's
         temporal = int(bool(self.settings.prefix_temporal and history))
-        self.run_stage("prefix", prefix_kernel, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
+        self.run_stage("prefix", prefix_kernel, [sc, p, temporal, self.current_camera,
+                                                 self.prev_camera or self.dscene.camera, gb.current,
                                                  gb.previous, self.prefixes.previous, self.prefix_gbs.previous],
                        [self.prefixes.current, self.prefix_gbs.current])
         self.build_search(p)
         # ---- suffixes at the resampled prefix ends: new, resampled with the previous frame's, then
         # spatial rounds (they write into the history's buffer, free once the suffix stage read it)
         temporal = int(bool(self.settings.suffix_temporal and history))
-        self.run_stage("suffix", suffix, [sc, p, temporal, self.prev_camera or self.dscene.camera, gb.current,
+        self.run_stage("suffix", suffix, [sc, p, temporal, self.current_camera, self.prev_camera or self.dscene.camera,
+                                          gb.current,
                                           gb.previous, self.prefixes.current, self.prefix_gbs.current,
                                           self.prefixes.previous, self.prefix_gbs.previous, res.previous],
                        [res.current, self.shift_events])

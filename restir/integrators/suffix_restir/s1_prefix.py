@@ -78,8 +78,8 @@ def fresh_prefix(scene: SceneDevice, params: SRParams, sh: Shading, pixel: int) 
 
 
 @wp.kernel(module=KERNEL_MODULE)
-def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, prev_camera: Camera, gb: GBuffer,
-                  prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
+def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, camera: Camera,
+                  prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
                   prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     sc = load_shading(scene, gb, pixel)
@@ -91,7 +91,7 @@ def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: i
     events[pixel] = packed_events(wp.vec4i(0, 0, 0, fresh.rays))
     if temporal == 0 or sc.valid == 0:
         return
-    nq = temporal_neighbor(scene, prev_camera, prev_gb, sc)
+    nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
     if nq.pixel == NO_PIXEL:
         return
     q = nq.pixel

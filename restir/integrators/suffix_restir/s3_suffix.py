@@ -81,8 +81,8 @@ def make_suffix_kernel(mutation: str = "none"):
     _, _, temporal_pair, _ = make_reuse_pair(SHIFT_INLINED)  # inlined: two calls (path_reuse/shift.py)
 
     @wp.kernel(module=module)
-    def suffix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, prev_camera: Camera,
-                      gb: GBuffer, prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
+    def suffix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, camera: Camera,
+                      prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
                       prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
                       prev_reservoirs: wp.array(dtype=PathReservoir), reservoirs: wp.array(dtype=PathReservoir),
                       shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
@@ -105,7 +105,7 @@ def make_suffix_kernel(mutation: str = "none"):
         if temporal == 0 or dc.sh.valid == 0:
             return
         # ---- temporal reuse of the previous frame's final suffix of the pixel that saw this hit
-        nq = temporal_neighbor(scene, prev_camera, prev_gb, load_shading(scene, gb, pixel))
+        nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, load_shading(scene, gb, pixel), pixel)
         if nq.pixel == NO_PIXEL:
             return
         q = nq.pixel
