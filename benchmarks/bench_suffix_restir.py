@@ -76,8 +76,8 @@ def query_ms(scene, size, max_depth, settings=None):
     from restir.integrators.common.shading import load_shading
     from restir.integrators.suffix_restir.params import SRParams
     from restir.integrators.suffix_restir.prefix import trace_prefix
-    from restir.integrators.suffix_restir.s2_search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_cell, grid_slot,
-                                                         nearest_prefix_ends)
+    from restir.integrators.suffix_restir.s2_search import (SEARCH_BVH, SEARCH_GRID, SearchStructure, grid_cell,
+                                                         grid_slot, nearest_prefix_ends)
     from restir.parallel import launch_pixels
 
     @wp.kernel
@@ -111,6 +111,13 @@ def query_ms(scene, size, max_depth, settings=None):
         """1 when box n holds x within its half-diagonal (search.consider's test), else 0."""
         return holds_box(search.centers[n], search.halves[n], x)
 
+    @wp.func
+    def cell_run(search: SearchStructure, lo: wp.vec3i, n: wp.vec3i, j: int) -> wp.vec2i:
+        """The entries of cell j (x fastest) of the n[0] x n[1] x n[2] cells from lo: the cells the
+        grid query reads (s2_search.grid_candidates), one by one."""
+        c = wp.vec3i(lo[0] + j % n[0], lo[1] + (j // n[0]) % n[1], lo[2] + j // (n[0] * n[1]))
+        return search.ranges[grid_slot(search, c)]
+
     @wp.kernel
     def count_kernel(offset: int, search: SearchStructure, points: wp.array(dtype=wp.vec3),
                      visited: wp.array(dtype=int), inside: wp.array(dtype=int)):
@@ -123,15 +130,13 @@ def query_ms(scene, size, max_depth, settings=None):
             k = int(0)
             if search.kind == SEARCH_GRID:
                 lo = grid_cell(search, x - wp.vec3(search.radius))
-                hi = grid_cell(search, x + wp.vec3(search.radius))
-                for cz in range(lo[2], hi[2] + 1):
-                    for cy in range(lo[1], hi[1] + 1):
-                        for cx in range(lo[0], hi[0] + 1):
-                            run = search.ranges[grid_slot(search, wp.vec3i(cx, cy, cz))]
-                            for i in range(run[0], run[1]):
-                                v += 1
-                                e = search.entries[i]
-                                k += holds_box(wp.vec3(e[0], e[1], e[2]), e[3], x)
+                cells = grid_cell(search, x + wp.vec3(search.radius)) - lo + wp.vec3i(1)
+                for j in range(cells[0] * cells[1] * cells[2]):  # the cells the query reads
+                    run = cell_run(search, lo, cells, j)
+                    v += run[1] - run[0]
+                    for i in range(run[0], run[1]):
+                        e = search.entries[i]
+                        k += holds_box(wp.vec3(e[0], e[1], e[2]), e[3], x)
             elif search.kind == SEARCH_BVH:
                 q = wp.bvh_query_aabb(search.id, x, x)
                 while wp.bvh_query_next(q, n):

@@ -7,7 +7,7 @@ import warp as wp
 import restir
 from restir.config import ConfigError
 from restir.device.camera import Camera, generate_ray
-from restir.integrators.common.reuse_domains import (MIN_SPATIAL_RADIUS, NO_PIXEL, reciprocal_pairing,
+from restir.integrators.common.reuse_domains import (NO_PIXEL, reciprocal_pairing,
                                                      reciprocal_partner, reproject, resolve_spatial_radius,
                                                      spatial_neighbor, spatial_radius_for)
 from restir.scene.transforms import rotate
@@ -139,11 +139,12 @@ def test_reciprocal_pairings_are_matchings_within_the_radius(radius, device):
 
 
 def test_spatial_radius_rule():
+    """The 1080-line radius in pixels at and below 1080 lines (not scaled down), scaled up above."""
     assert spatial_radius_for(15.0, 1080) == 15.0
     assert spatial_radius_for(15.0, 2160) == 30.0
-    assert spatial_radius_for(15.0, 128) == MIN_SPATIAL_RADIUS   # 1.8 px: the floor
-    assert spatial_radius_for(15.0, 256) == pytest.approx(15.0 * 256 / 1080)
-    assert resolve_spatial_radius("auto", 15.0, 512) == pytest.approx(15.0 * 512 / 1080)
+    assert spatial_radius_for(15.0, 128) == 15.0
+    assert spatial_radius_for(15.0, 256) == 15.0
+    assert resolve_spatial_radius("auto", 15.0, 512) == 15.0
     assert resolve_spatial_radius("4.5", 15.0, 512) == 4.5 and resolve_spatial_radius(6, 15.0, 512) == 6.0
     for bad in ("-1", "0", "wide", None):
         with pytest.raises(ConfigError):
@@ -153,6 +154,6 @@ def test_spatial_radius_rule():
 def test_default_radius_is_reported_in_pixels():
     scene = restir.load_scene("builtin:cornell-box", width=24, height=256)
     r = restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, frames=1))
-    assert r.stats["settings"]["spatial.radius"] == pytest.approx(15.0 * 256 / 1080)
+    assert r.stats["settings"]["spatial.radius"] == 15.0  # the 1080-line radius, not scaled down
     with pytest.raises(ConfigError):
         restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, settings={"spatial.radius": "-3"}))

@@ -13,8 +13,8 @@ from .reuse_domains import resolve_spatial_radius
 class SpatialReuseSettings(SettingsGroup):
     rounds: int = setting("rounds", 1, "spatial reuse rounds (pairwise MIS)")
     neighbors: int = setting("neighbors", 3, "neighbours per round")
-    radius: str = setting("radius", "auto", "neighbour disk radius in pixels; auto: {radius_at_1080:g} px at 1080 "
-                          "lines scaled with the height, >= 2")
+    radius: str = setting("radius", "auto", "neighbour disk radius in pixels; auto: {radius_at_1080:g} px up to "
+                          "1080 lines, scaled with the height above")
     reciprocal: bool = setting("reciprocal", False, "neighbours in pairs, each pixel the neighbour of its "
                                "neighbour, so that one pair of shifts serves both: k shifts per pixel instead of 2k "
                                "(ReSTIR PT Enhanced's reciprocal selection; the same estimator, other neighbours)",

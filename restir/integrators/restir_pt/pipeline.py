@@ -56,7 +56,7 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 })
 
 
-# The official defaults (ALGORITHMS.md 4.6), with the spatial radius scaled with the image, but
+# The official defaults (ALGORITHMS.md 4.6), with the spatial radius in pixels (scaled up above 1080 lines), but
 # for two chosen by the denoised equal-time measurement (BENCHMARKS.md, "ReSTIR PT's defaults
 # chosen after the denoiser"): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
 # frame, 252 B per pixel) and a temporal cap of 5, not the official 20 (less correlated error);

