@@ -133,7 +133,7 @@ def spatial_radius_for(radius_at_1080: float, height: int) -> float:
     cover the same part of the scene). Not scaled down: a denoiser works in pixels, and a reuse
     copies a neighbour's sample, so a disk of a few pixels puts copies of one sample next to each
     other, an error the denoiser keeps as detail. At 128 lines ReSTIR PT's error after Open Image
-    Denoise was 2.4-6x the path tracer's at equal time with the disk scaled down to 2.4 px, and
+    Denoise was 1.4-6x the path tracer's at equal time with the disk scaled down to 2.4 px, and
     1.1-1.4x lower with 16-24 px on three of four scenes (BENCHMARKS.md, "The spatial radius in
     pixels")."""
     return radius_at_1080 * max(1.0, height / REFERENCE_LINES)

@@ -104,8 +104,8 @@ temporal_reuse = make_temporal_reuse()
 
 
 @wp.kernel(module=SPLIT_MODULE)
-def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, camera: Camera, prev_camera: Camera, gb: GBuffer,
-                    prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=DIReservoir),
+def temporal_kernel(offset: int, scene: SceneDevice, params: DIParams, camera: Camera, prev_camera: Camera,
+                    gb: GBuffer, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=DIReservoir),
                     reservoirs: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
                     events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset

@@ -56,9 +56,9 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 })
 
 
-# The official defaults (ALGORITHMS.md 4.6), with the spatial radius in pixels (scaled up above 1080 lines), but
-# for two chosen by the denoised equal-time measurement (BENCHMARKS.md, "ReSTIR PT's defaults
-# chosen after the denoiser"): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
+# The official defaults (ALGORITHMS.md 4.6), with the spatial radius in pixels (scaled up above
+# 1080 lines), but for two chosen by the denoised equal-time measurement (BENCHMARKS.md, "ReSTIR
+# PT's defaults chosen after the denoiser"): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
 # frame, 252 B per pixel) and a temporal cap of 5, not the official 20 (less correlated error);
 # together the lowest error after the denoiser at equal time in 5 of 8 runs and the lowest
 # accumulated error in all 8. The official values are direct=restir-di, temporal.cap=20. And

@@ -51,8 +51,9 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.func(module=module or KERNEL_MODULE)
-    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera, prev_gb: GBuffer,
-                       prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir, sc: Shading, pixel: int):
+    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
+                       prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir,
+                       sc: Shading, pixel: int):
         none = wp.vec4i(0)
         if sc.valid == 0:
             return c, none, none
@@ -83,8 +84,7 @@ def make_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=
 
     @wp.kernel(module=module or SPLIT_MODULE)
     def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
-                        gb: GBuffer,
-                        prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
+                        gb: GBuffer, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                         shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset

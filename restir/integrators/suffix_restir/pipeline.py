@@ -50,9 +50,9 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
 SPATIAL_RADIUS_1080 = 30.0
 
 
-# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii in pixels (scaled up above 1080 lines),
-# but for the direct light, chosen by the denoised equal-time measurement (BENCHMARKS.md, "Suffix
-# ReSTIR's direct light"): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
+# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii in pixels (scaled up
+# above 1080 lines), but for the direct light, chosen by the denoised equal-time measurement
+# (BENCHMARKS.md, "Suffix ReSTIR's direct light"): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
 # component: frames 6-13% cheaper, level after the denoiser (within 4% either way over two seeds on
 # three scenes; on Veach Ajar, whose direct light at the primary hits is 0.15% of the image, the
 # same), accumulated error lower or equal in every run, 60 bytes a pixel less.
@@ -291,8 +291,7 @@ class SuffixReSTIR(PathReuseIntegrator):
         # spatial rounds (they write into the history's buffer, free once the suffix stage read it)
         temporal = int(bool(self.settings.suffix_temporal and history))
         self.run_stage("suffix", suffix, [sc, p, temporal, self.current_camera, self.prev_camera or self.dscene.camera,
-                                          gb.current,
-                                          gb.previous, self.prefixes.current, self.prefix_gbs.current,
+                                          gb.current, gb.previous, self.prefixes.current, self.prefix_gbs.current,
                                           self.prefixes.previous, self.prefix_gbs.previous, res.previous],
                        [res.current, self.shift_events])
         self.count_shifts("suffix")

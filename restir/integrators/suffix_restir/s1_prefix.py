@@ -79,8 +79,9 @@ def fresh_prefix(scene: SceneDevice, params: SRParams, sh: Shading, pixel: int) 
 
 @wp.kernel(module=KERNEL_MODULE)
 def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, camera: Camera,
-                  prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
-                  prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer, events: wp.array(dtype=EventCounts)):
+                  prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prev_prefixes: wp.array(dtype=PrefixReservoir),
+                  prev_prefix_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
+                  events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
     sc = load_shading(scene, gb, pixel)
     fresh = fresh_prefix(scene, params, sc, pixel)

@@ -56,7 +56,7 @@ class SearchStructure:
     mask: int
     keys: wp.array(dtype=wp.int32)
     ids: wp.array(dtype=wp.int32)
-    entries: wp.array(dtype=wp.vec4)   # the boxes in slot order, (centre, half-size): one aligned 16-byte read a candidate
+    entries: wp.array(dtype=wp.vec4)  # the boxes in slot order, (centre, half-size): one 16-byte read a candidate
     ranges: wp.array(dtype=wp.vec2i)
 
 

@@ -82,7 +82,8 @@ def make_suffix_kernel(mutation: str = "none"):
 
     @wp.kernel(module=module)
     def suffix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: int, camera: Camera,
-                      prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir), prefix_gb: GBuffer,
+                      prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prefixes: wp.array(dtype=PrefixReservoir),
+                      prefix_gb: GBuffer,
                       prev_prefixes: wp.array(dtype=PrefixReservoir), prev_prefix_gb: GBuffer,
                       prev_reservoirs: wp.array(dtype=PathReservoir), reservoirs: wp.array(dtype=PathReservoir),
                       shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
