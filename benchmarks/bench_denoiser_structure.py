@@ -10,12 +10,18 @@ For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the pa
   error at an unchanged raw error, the denoiser kept the error's arrangement: structure at that
   scale. (Only the 2x2 shuffle keeps the raw error close: shuffled over larger blocks, a large
   relative error of a dark pixel lands on a bright one.)
+- `--phase regions`: each method's denoised error split between the band of pixels that see an
+  emitter directly (the emission seen directly, max_depth 1 at 256 spp, non-zero, widened by one
+  pixel) and the rest of the image, with the path tracer at 1-4 spp for the equal-time reading.
+  Inside the band the error is the primary rays' anti-aliasing, which path reuse cannot lower and
+  which the path tracer samples once per spp.
 - `--phase jitter`: the same methods with the camera's filter offset on and off (pixel-centre
   rays, `RenderConfig.jitter`), each against its own reference; with the lag-1 correlation of
   horizontally neighbouring pixels' errors and F(8).
 
     .venv/bin/python benchmarks/bench_denoiser_structure.py --phase shuffle
     .venv/bin/python benchmarks/bench_denoiser_structure.py --phase jitter
+    .venv/bin/python benchmarks/bench_denoiser_structure.py --phase regions --scene builtin:cornell-box-glossy
 
 (How it was used: BENCHMARKS.md, "The temporal history of the pixel itself".)
 """
@@ -98,6 +104,31 @@ def phase_shuffle(scene, seed, out):
     out["shuffle"] = rows
 
 
+def phase_regions(scene, seed, out):
+    from scipy.ndimage import binary_dilation
+
+    base = RenderConfig(method="pt", spp=1, frames=1, width=SIZE, height=SIZE)
+    ref = path_traced_reference(scene, 1024, base).image
+    seen = restir.render(scene, RenderConfig(method="pt", spp=256, frames=1, width=SIZE, height=SIZE, max_depth=1,
+                                             seed=7)).image
+    band = binary_dilation(seen.max(-1) > 0.0, iterations=1)
+    den = Denoiser.for_scene(scene, base)
+    w = 1.0 / (ref ** 2 + 0.01)  # relMSE's weight, per pixel and channel
+    rows = {"band_pixels": int(band.sum())}
+    methods = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}), ("pt 3 spp", "pt", 3, {}),
+               ("pt 4 spp", "pt", 4, {}), *METHODS[2:]]
+    for label, method, spp, settings in methods:
+        frames, ms = frames_of(scene, method, spp, settings, True, seed)
+        e = np.mean([((den(f) - ref) ** 2 * w).mean(-1) for f in frames], 0)
+        raw = np.mean([((f - ref) ** 2 * w).mean(-1) for f in frames], 0)
+        r = {"ms": ms, "raw": float(raw.mean()), "denoised": float(e.mean()), "denoised_band": float(e[band].sum() / e.size),
+             "denoised_rest": float(e[~band].sum() / e.size), "raw_rest": float(raw[~band].sum() / raw.size)}
+        rows[label] = r
+        print(f"{label:26s} {ms:.0f} ms/frame raw {r['raw']:.4f} denoised {r['denoised']:.5f} = band "
+              f"{r['denoised_band']:.5f} + rest {r['denoised_rest']:.5f} (raw rest {r['raw_rest']:.4f})", flush=True)
+    out["regions"] = rows
+
+
 def phase_jitter(scene, seed, out):
     rows = {}
     for jitter in (True, False):
@@ -119,14 +150,14 @@ def phase_jitter(scene, seed, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--phase", choices=("shuffle", "jitter"), required=True)
+    ap.add_argument("--phase", choices=("shuffle", "jitter", "regions"), required=True)
     ap.add_argument("--scene", default="builtin:indirect-room")
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--json", help="write the rows here")
     args = ap.parse_args()
     scene = restir.load_scene(args.scene)
     out = {"scene": args.scene, "seed": args.seed}
-    {"shuffle": phase_shuffle, "jitter": phase_jitter}[args.phase](scene, args.seed, out)
+    {"shuffle": phase_shuffle, "jitter": phase_jitter, "regions": phase_regions}[args.phase](scene, args.seed, out)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as f:

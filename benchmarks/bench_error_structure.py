@@ -60,6 +60,8 @@ def main():
     ap.add_argument("--methods", nargs="*", help="methods to compare on every scene, 'name:key=value,...' "
                     "(default: the scene's own list)")
     ap.add_argument("--out", default="out/bench_error_structure.json")
+    ap.add_argument("--no-jitter", dest="jitter", action="store_false", help="pixel-centre primary rays for every "
+                    "method and the reference (RenderConfig.jitter): no anti-aliasing noise, each pixel one primary hit")
     ap.add_argument("--report", metavar="DIR", help="also write each scene's HTML report into DIR/<scene>")
     args = ap.parse_args()
     rows = []
@@ -71,7 +73,7 @@ def main():
         budget = dict(frames=args.frames) if args.frames else dict(equal_time=args.seconds)
         r = compare(load(spec), args.methods or methods, **budget, warmup=args.warmup, width=w, height=h,
                     max_depth=depth, reference_spp=args.ref_spp, denoise=True, correlation_runs=args.runs,
-                    seed=args.seed)
+                    seed=args.seed, jitter=args.jitter)
         heads = {x["method"]: x for x in r.headline}
         if args.report:
             from restir.compare.report import write_report

@@ -77,6 +77,19 @@ def ris_merge(s: RisState, m: float, p_hat: float, J: float, W: float, M: float,
 
 
 @wp.func
+def ris_expected_add(L: wp.vec3, w: float, F: wp.vec3, p_hat: float) -> wp.vec3:
+    """L plus one input's term of the pass's expected output, w F(y) / p_hat(y) (the inputs that
+    ris_stream zeroes add nothing). Over a pass, sum_i w_i F(y_i) / p_hat(y_i) / normalization is
+    the expectation of its output F(Y) W given its inputs (selecting y_i with probability
+    w_i / w_sum, W = w_sum / (p_hat(Y) normalization)): the same mean with the selection's noise
+    averaged out (Rao-Blackwell). With p_hat = luminance(F) only the colour differs from F(Y) W:
+    every term has luminance w_i."""
+    if is_finite(w) and w > 0.0 and p_hat > 0.0:
+        return L + F * (w / p_hat)
+    return L
+
+
+@wp.func
 def ris_contribution_weight(s: RisState, normalization: float) -> float:
     """W = w_sum / (p_hat(y) * normalization); 0 when nothing was selected. A non-finite W is
     returned as it is (never silently zeroed): it surfaces in the stages' non-finite counters."""

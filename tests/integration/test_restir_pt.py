@@ -50,6 +50,11 @@ SLOW = pytest.mark.slow  # kept out of the fast tier for its time budget (covere
 SPHERE = {
     "defaults": {},
     "direct-restir-di": {"direct": "restir-di"},  # the ReSTIR DI component gives the direct light
+    "direct-nee": {"direct": "nee"},  # the base paths' events at the primary hit summed, not resampled
+    # the image from the last pass's expected output: spatial (reciprocal, independent), temporal
+    "expected": {"shade.expected": True},
+    "expected-independent": ({"shade.expected": True, "spatial.reciprocal": False}, SLOW),
+    "expected-temporal-nee": {"shade.expected": True, "spatial.rounds": 0, "direct": "nee"},
     "canonical-1": {"temporal": False, "spatial.rounds": 0},
     "canonical-4": ({"temporal": False, "spatial.rounds": 0, "candidates": 4}, SLOW),
     "reconnection": {"shift": "reconnection", "direct": "pt"},
@@ -130,6 +135,41 @@ def test_estimator_mutations_are_caught_on_the_sphere(mutation):
         check_sphere({"debug.mutation": mutation, "direct": "pt"}, allow_mutation=True)
 
 
+def test_expected_output_not_normalized_is_caught():
+    """shade.expected whose spatial pass does not divide its expected output by V + 1 (the
+    `expected_unnormalized` mutation, about 4x bright) fails the sphere that shade.expected passes."""
+    with pytest.raises(AssertionError):
+        check_sphere({"debug.mutation": "expected_unnormalized", "shade.expected": True}, allow_mutation=True)
+
+
+@pytest.mark.parametrize("settings", [{}, {"spatial.rounds": 0}, {"spatial.reciprocal": False, "direct": "nee"}])
+def test_expected_output_changes_only_the_colour(settings):
+    """shade.expected replaces the selected sample F(Y) W by the last pass's expectation over its
+    inputs, sum_i w_i F(y_i) / p_hat(y_i) / normalization. With p_hat the luminance, each term's
+    luminance is w_i, so every pixel keeps its luminance (w_sum / normalization) exactly while its
+    colour changes; the reservoirs do not see the image, so the shifts and final samples are those
+    of the run without it, frame after frame."""
+    scene = restir.load_scene("builtin:cornell-box-glossy", width=24, height=20)
+    out = {}
+    for expected in (False, True):
+        cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=4, seed=9, max_depth=5, keep_frames=True,
+                                  settings={**settings, "shade.expected": expected})
+        out[expected] = restir.render(scene, cfg)
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    a, b = (np.asarray(out[e].frame_images, np.float64) for e in (False, True))
+    assert np.allclose(a @ lum, b @ lum, rtol=1e-4, atol=1e-6)
+    assert np.abs(a - b).max() > 1e-2  # the colours did change
+    assert out[False].stats["shifts"] == out[True].stats["shifts"]
+    assert out[False].stats["final_samples"] == out[True].stats["final_samples"]
+
+
+def test_direct_light_counted_twice_is_caught():
+    """direct=nee's trace stage resampling the events at x_0 as well as summing them (the
+    `nee_also_resampled` mutation) fails the sphere that direct=nee passes (SPHERE above)."""
+    with pytest.raises(AssertionError):
+        check_sphere({"debug.mutation": "nee_also_resampled", "direct": "nee"}, allow_mutation=True)
+
+
 @pytest.mark.parametrize("reciprocal", [False, True])
 def test_dropping_failed_shifts_is_caught(reciprocal):
     """Neighbours whose shift failed left out of V and of the canonical weight (defect A3's
@@ -202,7 +242,9 @@ def test_harness_refuses_mutations():
         runs(sphere(), {"debug.mutation": "bsdf_twice"}, 2, 1, 4)
 
 
-@pytest.mark.parametrize("settings", [{}, {"direct": "restir-di"}, {"mcmc.steps": 1, "spatial.rounds": 2}])
+@pytest.mark.parametrize("settings", [{}, {"direct": "restir-di"}, {"direct": "nee"},
+                                      {"mcmc.steps": 1, "spatial.rounds": 2}, {"shade.expected": True},
+                                      {"shade.expected": True, "spatial.rounds": 0}])
 def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
     """The shipped pipeline runs trace + initial RIS and temporal reuse as one kernel, and every
     pass after it writes into the history's buffer; stages.split runs the two stages apart with a
@@ -230,10 +272,12 @@ def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
 def test_memory_per_pixel():
     """Issue 22's memory target, 256 B per pixel with the film's accumulation not counted, met by
     the defaults (direct=pt: direct light in the path reservoirs; the primary rays rebuilt from the
-    camera position: 220 B); with the ReSTIR DI component (direct=restir-di) 280 B. The registry
+    camera position: 220 B); with the ReSTIR DI component (direct=restir-di) 280 B; with direct=nee
+    232 B (the trace stage's direct light, 12 B); with shade.expected 232 B (the expected output). The registry
     counts every buffer a method allocates, so a buffer added anywhere moves these numbers."""
     scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
-    for settings, expected in (({}, 220), ({"direct": "restir-di"}, 280)):
+    for settings, expected in (({}, 220), ({"direct": "restir-di"}, 280), ({"direct": "nee"}, 232),
+                               ({"shade.expected": True}, 232)):
         res = restir.render(scene, restir.RenderConfig(method="restir-pt", spp=2, settings=settings))
         bpp = res.stats["bytes_per_pixel"]
         assert bpp["total"] - bpp["film_mean"] - bpp["film_m2"] == expected, bpp

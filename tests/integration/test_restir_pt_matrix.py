@@ -46,6 +46,13 @@ MATRIX = {
     "C4-official": ({**OFFICIAL}, "none"),  # the defaults until 2026-12-06 (cell C4-defaults then)
     "C4-cap-5": ({**OFFICIAL, "temporal.cap": 5.0}, "none"),
     "C4-direct-pt": ({**OFFICIAL, "direct": "pt"}, "none"),
+    # direct=nee: the base paths' events at x_0 summed, resampling from x_1 (every stage on)
+    "C4-direct-nee": ({"direct": "nee"}, "none"),
+    "C4-direct-nee-orbit": ({"direct": "nee"}, "orbit"),
+    # shade.expected: the image from the last pass's expected output (spatial, temporal)
+    "C4-expected": ({"shade.expected": True}, "none"),
+    "C4-expected-nee-orbit": ({"shade.expected": True, "direct": "nee"}, "orbit"),
+    "C2-expected-nee": ({"shade.expected": True, "direct": "nee", **TEMPORAL}, "none"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     # reciprocal neighbours (spatial.reciprocal, the default): the pass on its own, several rounds
     "C3-reciprocal-k3": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True}, "none"),

@@ -10,6 +10,10 @@ weights, w = p_hat(F) (p_source = 1 in primary sample space; no Russian roulette
 path counts M = 1 however many events it has (6 item 5). With C paths per pixel each event is
 weighted 1/C and M = C.
 
+With direct=nee (params.direct_nee) the events at x_0 are summed into `direct` instead, as the
+path tracer sums them, and resampling starts at x_1 (first_event = 1): the same partition of the
+paths as with ReSTIR DI owning x_0's light, with the path tracer's estimator for that part.
+
 While tracing, the path keeps its rc vertex (rc_criteria.py) and splits its throughput into
 the part up to and including rcPrev's bounce (beta) and the part after z's own bounce
 (beta_rc), so that an event's record holds exactly what a reconnection needs (path_sample.py).
@@ -42,6 +46,7 @@ class BasePath:
     s: RisState
     r: PathReservoir
     rays: int
+    direct: wp.vec3  # direct=nee: the events at x_0, summed (each weighted 1/C)
 
 
 @wp.func
@@ -87,15 +92,19 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
     k = int(0)
     while k + 2 <= params.max_depth:
         # ---- NEE at x_k: an event of length k
-        if k >= params.first_event and bsdf_is_delta_only(mat) == 0:
+        summed = params.direct_nee != 0 and k == 0
+        if (k >= params.first_event or summed) and bsdf_is_delta_only(mat) == 0:
             c = nee_at(scene, hit, mat, frame, wi, seed, wp.uint32(0), k, 1, STRATEGY_MIS)
             out.rays += c.rays
             F = wp.cw_mul(beta, c.L)
+            if summed:
+                out.direct += F * scale
             p_hat = luminance(F)
             index = index_base + PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_NEE
-            out.s = ris_stream(out.s, p_hat * scale, p_hat, 0.0, index, rng_uniform(ris_key, wp.uint32(
-                PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_NEE)))
-            if out.s.selected == index:
+            if k >= params.first_event:
+                out.s = ris_stream(out.s, p_hat * scale, p_hat, 0.0, index, rng_uniform(ris_key, wp.uint32(
+                    PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_NEE)))
+            if k >= params.first_event and out.s.selected == index:
                 if rc_len != NO_RC:
                     out.r = event_record(F, pack_flags(k, rc_len, lobe_prev_rc, lobe_rc, 1, RC_SURFACE), seed, rc_tri,
                                          rc_bary, rc_wi, wp.cw_mul(beta_rc, c.L), rc_jac, c.p_light)
@@ -140,6 +149,9 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
             # two vertices (rc_criteria.segment)
             jac_next = wp.abs(wp.dot(nh.ng, fd.dir)) / (dist * dist) * bsdf_pdf_lobes(mat, wi, to_local(frame, fd.dir),
                                                                                         sc.bs.lobe)
+        if params.direct_nee != 0 and k == 0 and max3(Le) > 0.0:
+            out.direct += wp.cw_mul(beta, Le) * (emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1,
+                                                                     STRATEGY_MIS) * scale)
         if k >= params.first_event and max3(Le) > 0.0:
             mis = emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1, STRATEGY_MIS)
             F = wp.cw_mul(beta, Le) * mis

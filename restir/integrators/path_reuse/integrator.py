@@ -53,6 +53,7 @@ class PathReuseIntegrator(Integrator):
     the attribute holding its SpatialReuseSettings) and its MUTATIONS."""
 
     SPATIAL = "spatial"
+    DIRECT = ("restir-di", "pt")  # the direct settings the method has
 
     @classmethod
     def check_path_settings(cls, settings) -> None:
@@ -63,8 +64,8 @@ class PathReuseIntegrator(Integrator):
         s = settings
         if s.shift not in SHIFTS:
             raise ConfigError(f"shift must be one of {', '.join(SHIFTS)}")
-        if s.direct not in ("restir-di", "pt"):
-            raise ConfigError("direct must be restir-di or pt")
+        if s.direct not in cls.DIRECT:
+            raise ConfigError(f"direct must be {' or '.join(cls.DIRECT)}")
         if not 1 <= s.candidates <= PT_MAX_CANDIDATES:
             raise ConfigError(f"candidates must be in [1, {PT_MAX_CANDIDATES}]")
         getattr(s, cls.SPATIAL).check(PT_MAX_NEIGHBORS)
@@ -102,8 +103,9 @@ class PathReuseIntegrator(Integrator):
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
         self.di = attach_direct_light(self)
         # the first vertex whose events the method resamples; paths need max_depth >= first + 2
-        self.first_event = 1 if s.direct == "restir-di" else 0
-        self.resamples = s.max_depth >= self.first_event + 2
+        # (direct=nee sums x_0's events in the trace stage, which then runs from max_depth 2)
+        self.first_event = 0 if s.direct == "pt" else 1
+        self.resamples = s.max_depth >= (2 if s.direct == "nee" else self.first_event + 2)
 
     def wants_pass_buffer(self) -> bool:
         """Whether a reuse pass runs while the history is still to be read, so that its output
@@ -121,6 +123,8 @@ class PathReuseIntegrator(Integrator):
         p.candidates = int(s.candidates)
         p.max_depth = int(s.max_depth)
         p.first_event = self.first_event
+        p.direct_nee = int(s.direct == "nee")
+        p.expected_out = 0
         p.shift = int(SHIFTS[s.shift])
         p.near_distance = float(near_distance)
         p.rough_threshold = float(s.rc_roughness)

@@ -16,7 +16,9 @@ class PathReuseParams:
     sample: int            # sample index within the frame (spp > 1 repeats the pipeline)
     candidates: int        # base paths per pixel (each is one streaming-RIS reservoir of M = 1)
     max_depth: int         # Mitsuba's meaning: path segments, the camera segment included
-    first_event: int       # the first vertex index whose events ReSTIR PT owns: 1 with direct=restir-di, 0 with direct=pt
+    first_event: int       # the first vertex index whose events are resampled: 0 with direct=pt, else 1
+    direct_nee: int        # 1 (direct=nee): the events at x_0 (NEE, emission found from x_0) summed, not resampled
+    expected_out: int      # 1: this pass is the last and writes its expected output (ReSTIR PT's shade.expected)
     shift: int             # SHIFT_*
     near_distance: float   # hybrid: the shortest reconnection segment (scene units; official 0.1)
     rough_threshold: float  # hybrid: glossy lobes rougher than this linear roughness are rough (official 0.2)

@@ -159,6 +159,15 @@ def holds_path(r: PathReservoir) -> bool:
 
 
 @wp.func
+def sample_output(r: PathReservoir) -> wp.vec3:
+    """The reservoir's estimate of its pixel's paths, F(Y) W (before the filter weight): what the
+    shade stage adds; 0 without a path."""
+    if holds_path(r) and r.W > 0.0:
+        return r.F * r.W
+    return wp.vec3(0.0)
+
+
+@wp.func
 def store(chosen: PathReservoir, f: ReservoirWeights) -> PathReservoir:
     """The stored result of a resampling pass: the chosen input's path (already shifted into this
     domain: F and rc_jac are this domain's) with the pass's W and M; with nothing selected, no

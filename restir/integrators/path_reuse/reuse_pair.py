@@ -25,7 +25,7 @@ import warp as wp
 from ...device.color import luminance
 from ...device.scene_device import SceneDevice
 from ...resampling.mis import PairwiseMIS, pairwise_add_neighbor, pairwise_init, talbot_weight2
-from ...resampling.ris import RisState, ris_init, ris_merge
+from ...resampling.ris import RisState, ris_expected_add, ris_init, ris_merge
 from .domain import Domain
 from .path_sample import ORIGIN_SPATIAL, ORIGIN_TEMPORAL, PathReservoir, holds_path, with_origin
 from .shift import ShiftResult, shift_counts, shift_path
@@ -81,6 +81,7 @@ class Reuse:
     mis: PairwiseMIS
     chosen: PathReservoir
     tl: ShiftTally
+    L: wp.vec3  # sum over the inputs of w F(y) / p_hat(y): the pass's expected output (ris_expected_add)
 
 
 @wp.func
@@ -101,6 +102,7 @@ def merge_neighbor(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn
     out = st
     out.mis = pairwise_add_neighbor(st.mis, nbr.d_i, nbr.d_c, luminance(c.F) * c.M, own_d_i)
     out.s = ris_merge(st.s, out.mis.m_i, nbr.p_c, nbr.t.J, r.W, r.M, j, u)
+    out.L = ris_expected_add(st.L, out.mis.m_i * nbr.p_c * nbr.t.J * r.W, nbr.t.r.F, nbr.p_c)
     if out.s.selected == j:
         out.chosen = with_origin(nbr.t.r, ORIGIN_SPATIAL)
     return out
@@ -158,9 +160,12 @@ def make_reuse_pair(shift=shift_path, module=None):
         st.tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
         st.s = ris_init()
         p_c = luminance(c.F)
-        st.s = ris_merge(st.s, talbot_weight2(p_c * c.M, cur.d_i, CURRENT), p_c, 1.0, c.W, c.M, CURRENT, u_current)
-        st.s = ris_merge(st.s, talbot_weight2(hist.d_c, hist.d_i, HISTORY), hist.p_c, hist.t.J, r.W, Mq, HISTORY,
-                         u_history)
+        m_c = talbot_weight2(p_c * c.M, cur.d_i, CURRENT)
+        m_h = talbot_weight2(hist.d_c, hist.d_i, HISTORY)
+        st.s = ris_merge(st.s, m_c, p_c, 1.0, c.W, c.M, CURRENT, u_current)
+        st.s = ris_merge(st.s, m_h, hist.p_c, hist.t.J, r.W, Mq, HISTORY, u_history)
+        st.L = ris_expected_add(ris_expected_add(wp.vec3(0.0), m_c * p_c * c.W, c.F, p_c),
+                                m_h * hist.p_c * hist.t.J * r.W, hist.t.r.F, hist.p_c)
         st.chosen = c
         if st.s.selected == HISTORY:
             st.chosen = with_origin(hist.t.r, ORIGIN_TEMPORAL)
@@ -187,6 +192,7 @@ def spatial_canonical(st: Reuse, c: PathReservoir, u: float) -> Reuse:
     out = st
     p_c = luminance(c.F)
     out.s = ris_merge(st.s, st.mis.m_c, p_c, 1.0, c.W, c.M, CANONICAL, u)
+    out.L = ris_expected_add(st.L, st.mis.m_c * p_c * c.W, c.F, p_c)
     if out.s.selected == CANONICAL:
         out.chosen = c
     return out

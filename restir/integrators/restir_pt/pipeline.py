@@ -53,6 +53,12 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
         make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
         make_reciprocal_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
+    # direct=nee whose trace stage also resamples the events at x_0 it sums (first_event 0):
+    # direct light counted twice
+    "nee_also_resampled": None,
+    # shade.expected: the reciprocal spatial pass's expected output not divided by V + 1
+    "expected_unnormalized": lambda: (trace_temporal_kernel, mcmc_kernel, spatial_kernel, make_reciprocal_spatial_kernel(
+        expected_unnormalized=True, module="restir_pt_expected_unnormalized")),
 })
 
 
@@ -70,10 +76,15 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 class PTSettings(PathReuseSettings):
     direct: str = setting("direct", "pt", "pt: the method's paths own every event, direct light included; "
                           "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings; the "
-                          "official ReSTIR PT's choice)")
+                          "official ReSTIR PT's choice); nee: the base paths' events at the primary hit summed as "
+                          "the path tracer sums them, not resampled (+12 B per pixel)")
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
     temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x; the official value is 20)")
+    shade_expected: bool = setting("shade.expected", False, "the image takes the last resampling pass's expected "
+                                   "output given its inputs (each input's sample weighted by its chance of being "
+                                   "selected) instead of the selected sample's: the same luminance, the inputs' "
+                                   "colours averaged (Rao-Blackwell; unbiased, no extra rays, +12 B per pixel)")
     mcmc_start: str = setting("mcmc.start", "z", "where an MCMC mutation redraws the path: z (after the reconnection "
                               "vertex, which stays) or rc_prev (after the vertex before it: z moves too)")
     mcmc_steps: int = setting("mcmc.steps", 0, "MCMC mutations of each pixel's sample per frame, after temporal and "
@@ -111,6 +122,8 @@ class ReSTIRPT(PathReuseIntegrator):
             raise ConfigError(f"mcmc.steps must be in [0, {PT_MAX_MCMC_STEPS}]")
         if settings.mcmc_start not in ("z", "rc_prev"):
             raise ConfigError("mcmc.start must be z or rc_prev")
+        if settings.shade_expected and settings.mcmc_steps > 0 and settings.spatial.rounds == 0:
+            raise ConfigError("shade.expected needs a resampling pass last: with mcmc.steps > 0, spatial.rounds >= 1")
         if settings.stages_split and MUTATIONS.builds_kernels(settings.debug_mutation):
             raise ConfigError("debug.mutation builds the fused pipeline's kernels; it cannot run with stages.split")
 
@@ -124,8 +137,17 @@ class ReSTIRPT(PathReuseIntegrator):
         history's buffer (path_reuse/integrator.py)."""
         return bool(self.settings.stages_split)
 
+    DIRECT = ("restir-di", "pt", "nee")
+
     def allocate(self) -> None:
         self.allocate_path_reuse()
+        # direct=nee: the trace stage's direct light (emission seen directly and x_0's summed
+        # events); otherwise never written, one element
+        nee = self.settings.direct == "nee"
+        self.direct_nee = self.buffer("direct_nee", wp.vec3) if nee else wp.zeros(1, dtype=wp.vec3, device=self.device)
+        # shade.expected: the last pass's expected output (and the reciprocal pass's running sum)
+        ex = self.settings.shade_expected
+        self.expected = self.buffer("expected", wp.vec3) if ex else wp.zeros(1, dtype=wp.vec3, device=self.device)
         # a round's pairings for spatial.reciprocal (16 B per neighbour, not per pixel)
         self.pairings = wp.zeros(PT_MAX_NEIGHBORS, dtype=wp.vec4i, device=self.device)
         self.origins = np.zeros(3, np.int64)  # final samples by origin: canonical, temporal, spatial
@@ -133,7 +155,10 @@ class ReSTIRPT(PathReuseIntegrator):
 
     def params(self, frame: int, sample: int) -> PathReuseParams:
         s = self.settings
-        return self.pt_params(frame, sample, s.rc_near_distance, s.temporal_cap)
+        p = self.pt_params(frame, sample, s.rc_near_distance, s.temporal_cap)
+        if s.debug_mutation == "nee_also_resampled":
+            p.first_event = 0
+        return p
 
     def resample_sample(self, frame: int, sample: int, direct):
         sc = self.dscene.scene
@@ -142,34 +167,45 @@ class ReSTIRPT(PathReuseIntegrator):
         gb, res = self.gbuffers, self.reservoirs
         p = self.params(frame, sample)
         temporal = bool(self.settings.temporal and self.prev_camera is not None)
+        sp = self.settings.spatial
+        # shade.expected: the last resampling pass writes its expected output (the fused trace +
+        # temporal kernel even without a history: the new reservoir's own F W)
+        expected = bool(self.settings.shade_expected)
+        p.expected_out = int(expected and sp.rounds == 0)
+        use_expected = expected and (sp.rounds > 0 or not self.settings.stages_split or temporal)
         if self.settings.stages_split:
-            self.run_stage("trace_initial", initial_kernel, [sc, p, gb.current], [res.current])
+            self.run_stage("trace_initial", initial_kernel, [sc, p, gb.current, self.emission, self.primary_weight],
+                           [res.current, self.direct_nee])
             if temporal:
                 self.reuse_pass("temporal", temporal_kernel,
                                 [sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
-                                 res.previous])
+                                 res.previous], scratch=(self.expected,))
         else:
             prev_camera = self.prev_camera or self.dscene.camera  # unread without temporal reuse
             self.run_stage("trace_temporal", trace_temporal,
                            [sc, p, int(temporal), self.current_camera, prev_camera, gb.current, gb.previous,
-                            res.previous],
-                           [res.current, self.shift_events])
+                            res.previous, self.emission, self.primary_weight],
+                           [res.current, self.direct_nee, self.expected, self.shift_events])
             if temporal:
                 self.count_shifts("temporal")
         if self.settings.mcmc_steps > 0:
             self.reuse_pass("mcmc", mcmc, [sc, p, int(self.settings.mcmc_steps),
                                            int(self.settings.mcmc_start == "rc_prev"), gb.current], counts=("mcmc",))
-        sp = self.settings.spatial
         for rd in range(sp.rounds):
             p.spatial_round = rd
-            if sp.reciprocal:  # one launch per neighbour, the pass's state between them in sample_L
+            p.expected_out = int(expected and rd == sp.rounds - 1)
+            if sp.reciprocal:  # one launch per neighbour, the pass's state between them in sample_L (and expected)
                 wp.launch(pairings_kernel, dim=sp.neighbors, inputs=[p], outputs=[self.pairings], device=self.device)
                 self.reuse_pass("spatial", reciprocal, [sc, p, self.width, self.height, gb.current, self.pairings],
-                                mutation == "spatial_in_place", parts=sp.neighbors, scratch=(self.sample_L,))
+                                mutation == "spatial_in_place", parts=sp.neighbors,
+                                scratch=(self.sample_L, self.expected))
             else:
                 self.reuse_pass("spatial", spatial, [sc, p, self.width, self.height, gb.current],
-                                mutation == "spatial_in_place")
-        self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight],
+                                mutation == "spatial_in_place", scratch=(self.expected,))
+        if self.settings.direct == "nee":  # the trace stage's: the emission seen directly and x_0's events
+            direct = self.direct_nee
+        self.run_stage("shade", shade_kernel, [res.current, direct, self.primary_weight, self.expected,
+                                               int(use_expected)],
                        [self.sample_L, self.shift_events], nonfinite="nonfinite_outputs")
         self.tally.add(("origins",), self.shift_events)  # the shade stage counts the final samples' origins
         return self.sample_L

@@ -5,7 +5,10 @@ per event). Pixels without a primary hit keep an empty reservoir of M = 0.
 
 By default this stage runs fused with temporal reuse (s2_temporal.py: one kernel, the new
 reservoir never stored); `stages.split` launches it as a kernel of its own, timed apart.
-Reads: scene, G-buffer. Writes: reservoirs, events (non-finite and zero weights, rays).
+With direct=nee the stage also writes the pixel's direct light: the emission seen directly plus
+its base paths' summed events at x_0, times the filter weight (the shade stage adds it).
+Reads: scene, G-buffer, emission, filter weights. Writes: reservoirs, direct light (direct=nee),
+events (non-finite and zero weights, rays).
 """
 import warp as wp
 
@@ -26,7 +29,8 @@ _built: dict = {}
 
 
 def make_initial_reservoir(m_per_event: bool = False):
-    """The stage's work for one pixel as a function, (reservoir, events) from its shading point:
+    """The stage's work for one pixel as a function, (reservoir, events, the summed events at x_0
+    of direct=nee) from its shading point:
     what the split kernel stores and the fused kernel keeps in registers. m_per_event builds the
     mutation that counts M per streamed event (and divides W by it), the defect TESTING.md 5.11
     lists; the shipped function is built without it."""
@@ -53,7 +57,7 @@ def make_initial_reservoir(m_per_event: bool = False):
                 f = ris_finalize(acc.s, wp.max(1.0, n) / float(params.candidates))
                 f.M = wp.max(1.0, n)
             out = store(acc.r, f)
-        return out, stage_events(acc.s, 0, acc.rays)
+        return out, stage_events(acc.s, 0, acc.rays), acc.direct
 
     _built[m_per_event] = initial_reservoir
     return initial_reservoir
@@ -64,9 +68,13 @@ initial_reservoir = make_initial_reservoir()
 
 @wp.kernel(module=SPLIT_MODULE)
 def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
-                   reservoirs: wp.array(dtype=PathReservoir), events: wp.array(dtype=EventCounts)):
+                   emission: wp.array(dtype=wp.vec3), primary_weight: wp.array(dtype=float),
+                   reservoirs: wp.array(dtype=PathReservoir), direct: wp.array(dtype=wp.vec3),
+                   events: wp.array(dtype=EventCounts)):
     """The stage on its own (`stages.split`)."""
     pixel = wp.tid() + offset
-    r, ev = initial_reservoir(scene, params, load_shading(scene, gb, pixel), pixel)
+    r, ev, d = initial_reservoir(scene, params, load_shading(scene, gb, pixel), pixel)
     reservoirs[pixel] = r
+    if params.direct_nee != 0:
+        direct[pixel] = emission[pixel] + d * primary_weight[pixel]
     events[pixel] = packed_events(ev)

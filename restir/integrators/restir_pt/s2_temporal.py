@@ -17,7 +17,8 @@ reads). With temporal = 0 (the first frame, or temporal reuse off) it is stage 1
 `stages.split` runs the stages as two kernels instead, each timed, with the third buffer:
 the same functions in the same order, so the images are bit for bit the same.
 Reads: scene, G-buffer, previous G-buffer and camera, previous final reservoirs (and, split, the
-reservoirs). Writes: reservoirs (split: reservoirs_out), shift counts, events.
+reservoirs; fused, stage 1's emission and filter weights). Writes: reservoirs (split:
+reservoirs_out), shift counts, events (fused, with direct=nee: stage 1's direct light).
 """
 import warp as wp
 
@@ -32,7 +33,7 @@ from ..common.reuse_domains import NO_PIXEL, temporal_neighbor
 from ..common.shading import Shading, load_shading
 from ..path_reuse.domain import domain_at
 from ..path_reuse.params import PathReuseParams
-from ..path_reuse.path_sample import PathReservoir, store
+from ..path_reuse.path_sample import PathReservoir, sample_output, store
 from ..path_reuse.reuse_pair import make_reuse_pair
 from ..path_reuse.shift import SHIFT_INLINED
 from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
@@ -42,8 +43,9 @@ _built: dict = {}
 
 
 def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
-    """The stage's work for one pixel as a function: (reservoir, shift counts, events) from the
-    pixel's new reservoir c and shading point sc. drop_failed builds the mutation that drops a
+    """The stage's work for one pixel as a function: (reservoir, shift counts, events, expected
+    output) from the pixel's new reservoir c and shading point sc; the expected output is the
+    pass's (Reuse.L), or c's own F W where no history was resampled. drop_failed builds the mutation that drops a
     history whose shift failed (its M and its density in the current sample's weight). Built once
     per (shift, drop_failed, module): the split and the fused kernels call the same function."""
     if (shift, drop_failed, module) in _built:
@@ -55,11 +57,12 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
                        prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir,
                        sc: Shading, pixel: int):
         none = wp.vec4i(0)
+        own = sample_output(c)
         if sc.valid == 0:
-            return c, none, none
+            return c, none, none, own
         nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
-            return c, none, none
+            return c, none, none, own
         q = nq.pixel
         dc = domain_at(sc, params)
         dq = domain_at(nq.sh, params)  # ReSTIR PT's pixels share the frame's parameters
@@ -69,10 +72,11 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
         base = wp.uint32(params.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
         if wp.static(drop_failed):
             if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
-                return c, none, none
+                return c, none, none, own
         # ---- the history's sample shifted here, and the current sample there (its density there)
         st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
-        return store(st.chosen, ris_finalize(st.s, 1.0)), st.tl.counts, stage_events(st.s, st.tl.failed, st.tl.rays)
+        return (store(st.chosen, ris_finalize(st.s, 1.0)), st.tl.counts, stage_events(st.s, st.tl.failed, st.tl.rays),
+                st.L)
 
     _built[shift, drop_failed, module] = temporal_reuse
     return temporal_reuse
@@ -86,11 +90,14 @@ def make_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=
     def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
                         gb: GBuffer, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                        shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
+                        expected: wp.array(dtype=wp.vec3), shifts: wp.array(dtype=PassCounts),
+                        events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
-        r, n, ev = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
-                                  load_shading(scene, gb, pixel), pixel)
+        r, n, ev, L = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
+                                     load_shading(scene, gb, pixel), pixel)
         reservoirs_out[pixel] = r
+        if params.expected_out != 0:
+            expected[pixel] = L
         shifts[pixel] = packed_counts(n)
         events[pixel] = packed_events(ev)
 
@@ -107,17 +114,23 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
     @wp.kernel(module=module or KERNEL_MODULE)
     def trace_temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, temporal: int,
                               camera: Camera, prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
-                              prev_reservoirs: wp.array(dtype=PathReservoir),
-                              reservoirs: wp.array(dtype=PathReservoir), shifts: wp.array(dtype=PassCounts),
-                              events: wp.array(dtype=EventCounts)):
+                              prev_reservoirs: wp.array(dtype=PathReservoir), emission: wp.array(dtype=wp.vec3),
+                              primary_weight: wp.array(dtype=float), reservoirs: wp.array(dtype=PathReservoir),
+                              direct: wp.array(dtype=wp.vec3), expected: wp.array(dtype=wp.vec3),
+                              shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         sc = load_shading(scene, gb, pixel)
-        c, ev = initial(scene, params, sc, pixel)
+        c, ev, d = initial(scene, params, sc, pixel)
+        if params.direct_nee != 0:  # stage 1's own output (s1_initial.py)
+            direct[pixel] = emission[pixel] + d * primary_weight[pixel]
         n = wp.vec4i(0)
+        L = sample_output(c)
         if temporal != 0:
-            c, n, ev_t = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
+            c, n, ev_t, L = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
+        if params.expected_out != 0:  # the last pass (no spatial reuse): its expected output
+            expected[pixel] = L
         shifts[pixel] = packed_counts(n)
         events[pixel] = packed_events(ev)
 

@@ -37,7 +37,7 @@ from ...device.streams import (DI_SPATIAL_DIM_CANONICAL, DI_SPATIAL_DIM_OFFSET, 
                                DI_SPATIAL_DIM_SHARE, DI_SPATIAL_DIMS_PER_NEIGHBOR, DI_SPATIAL_DIMS_PER_SAMPLE,
                                PAIRING_DIM_MASK, PAIRING_DIM_SHIFT, STAGE_PT_SPATIAL, STAGE_PT_SPATIAL_PAIRING)
 from ...resampling.mis import pairwise_canonical_term, pairwise_normalization
-from ...resampling.ris import ris_finalize, ris_merge
+from ...resampling.ris import ris_expected_add, ris_finalize, ris_merge
 from ..common.events import EventCounts, PassCounts, packed_counts, packed_events, stage_events
 from ..common.gbuffer import GBuffer
 from ..common.reuse_domains import NO_PIXEL, reciprocal_pairing, reciprocal_partner, spatial_technique
@@ -60,7 +60,8 @@ def make_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
     @wp.kernel(module=module or KERNEL_MODULE)
     def spatial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, width: int, height: int, gb: GBuffer,
                        reservoirs_in: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
-                       shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
+                       expected: wp.array(dtype=wp.vec3), shifts: wp.array(dtype=PassCounts),
+                       events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         c = reservoirs_in[pixel]
         events[pixel] = packed_events(wp.vec4i(0))
@@ -68,6 +69,8 @@ def make_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
         sc = load_shading(scene, gb, pixel)
         if sc.valid == 0:
             reservoirs_out[pixel] = c
+            if params.expected_out != 0:
+                expected[pixel] = wp.vec3(0.0)
             return
         key = rng_key(params.seed, params.frame, wp.uint32(STAGE_PT_SPATIAL + params.spatial_round), wp.uint32(pixel))
         base = wp.uint32(params.sample) * wp.uint32(DI_SPATIAL_DIMS_PER_SAMPLE)
@@ -88,6 +91,8 @@ def make_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
                                   rng_uniform(key, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)))
         st = spatial_canonical(st, c, rng_uniform(key, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)))
         reservoirs_out[pixel] = store(st.chosen, ris_finalize(st.s, pairwise_normalization(st.mis)))
+        if params.expected_out != 0:  # the last pass: its expected output for the shade stage
+            expected[pixel] = st.L / pairwise_normalization(st.mis)
         events[pixel] = packed_events(stage_events(st.s, st.tl.failed, st.tl.rays))
         shifts[pixel] = packed_counts(st.tl.counts)
 
@@ -102,12 +107,14 @@ RESUMED = wp.constant(2000)  # `selected` of a state resumed from an earlier lau
 
 @wp.func(inline=True)
 def resume(pixel: int, first: bool, c: PathReservoir, k: int, reservoirs_out: wp.array(dtype=PathReservoir),
-           sums: wp.array(dtype=wp.vec3)) -> Reuse:
+           sums: wp.array(dtype=wp.vec3), expected: wp.array(dtype=wp.vec3), with_expected: int) -> Reuse:
     """A pixel's resampling state at the start of launch j: fresh (j = 0: nothing is read), or the
     sums and the sample chosen so far, left by the launch before (its counts start at 0: `put`
-    adds them to the earlier launches')."""
+    adds them to the earlier launches'), and the expected output's sum so far (with_expected)."""
     st = spatial_start(c, k)
     if not first:
+        if with_expected != 0:
+            st.L = expected[pixel]
         acc = sums[pixel]
         held = reservoirs_out[pixel]
         st.s.w_sum = acc[0]
@@ -131,6 +138,7 @@ def add_pair(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn, own_
     share = pairwise_canonical_term(p_c * c.M, own_d_i, out.mis.k)
     zero = out.s.zero
     out.s = ris_merge(out.s, share, p_c, 1.0, c.W, 0.0, CANONICAL, u_share)
+    out.L = ris_expected_add(out.L, share * p_c * c.W, c.F, p_c)
     out.s.zero = zero
     if out.s.selected == CANONICAL:
         out.chosen = c
@@ -140,15 +148,19 @@ def add_pair(st: Reuse, c: PathReservoir, r: PathReservoir, nbr: ShiftedIn, own_
 @wp.func(inline=True)
 def put(pixel: int, valid: int, first: bool, last: bool, st: Reuse, c: PathReservoir, u_canonical: float,
         reservoirs_out: wp.array(dtype=PathReservoir), sums: wp.array(dtype=wp.vec3),
+        expected: wp.array(dtype=wp.vec3), with_expected: int, normalized: bool,
         shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
     """Write a pixel's state after its pair of launch j, its counts added to the launches' before;
-    after the last, the canonical input's last part and the finished reservoir. A pixel without a
-    primary hit keeps its input."""
+    after the last, the canonical input's last part and the finished reservoir, and (with_expected)
+    the pass's expected output (`normalized` false only in a fault-injected build). A pixel without
+    a primary hit keeps its input."""
     if valid == 0:
         if first:
             reservoirs_out[pixel] = c
             events[pixel] = packed_events(wp.vec4i(0))
             shifts[pixel] = packed_counts(wp.vec4i(0))
+            if with_expected != 0:
+                expected[pixel] = wp.vec3(0.0)
         return
     out = st
     if last:
@@ -157,9 +169,14 @@ def put(pixel: int, valid: int, first: bool, last: bool, st: Reuse, c: PathReser
         if out.s.selected == CANONICAL:
             out.chosen = c
         reservoirs_out[pixel] = store(out.chosen, ris_finalize(out.s, pairwise_normalization(out.mis)))
+        if with_expected != 0:
+            out.L = ris_expected_add(out.L, p_c * c.W, c.F, p_c)
+            expected[pixel] = out.L / wp.where(normalized, pairwise_normalization(out.mis), 1.0)
     else:
         reservoirs_out[pixel] = out.chosen
         sums[pixel] = wp.vec3(out.s.w_sum, out.s.M, float(out.mis.V))
+        if with_expected != 0:
+            expected[pixel] = out.L
     # the counts add up over the launches and are summed once, after the last (reuse_pass's parts)
     ev = stage_events(out.s, out.tl.failed, out.tl.rays)
     sh = out.tl.counts
@@ -181,9 +198,13 @@ def pairings_kernel(params: PathReuseParams, pairings: wp.array(dtype=wp.vec4i))
                                      rng_uniform2(key, dim + wp.uint32(PAIRING_DIM_SHIFT)))
 
 
-def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
+def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=None,
+                                   expected_unnormalized: bool = False):
     """The reciprocal spatial kernel over a shift function; drop_failed builds the mutation that
-    leaves neighbours whose shift failed out of the technique set (as make_spatial_kernel's)."""
+    leaves neighbours whose shift failed out of the technique set (as make_spatial_kernel's),
+    expected_unnormalized the one whose expected output is not divided by the pass's
+    normalization (V + 1)."""
+    normalized = not expected_unnormalized
     shift_in, _, _, _ = make_reuse_pair(shift, module)
 
     @wp.kernel(module=module or KERNEL_MODULE)
@@ -191,7 +212,8 @@ def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = Fals
                                   height: int, gb: GBuffer, pairings: wp.array(dtype=wp.vec4i),
                                   reservoirs_in: wp.array(dtype=PathReservoir),
                                   reservoirs_out: wp.array(dtype=PathReservoir), sums: wp.array(dtype=wp.vec3),
-                                  shifts: wp.array(dtype=PassCounts), events: wp.array(dtype=EventCounts)):
+                                  expected: wp.array(dtype=wp.vec3), shifts: wp.array(dtype=PassCounts),
+                                  events: wp.array(dtype=EventCounts)):
         q = wp.tid() + offset
         n = reciprocal_partner(q, width, height, pairings[j])
         if n != NO_PIXEL and n < q:
@@ -204,14 +226,15 @@ def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = Fals
         key_q = rng_key(params.seed, params.frame, stage, wp.uint32(q))
         c_q = reservoirs_in[q]
         sh_q = load_shading(scene, gb, q)
-        st_q = resume(q, first, c_q, params.spatial_k, reservoirs_out, sums)
+        ex = params.expected_out
+        st_q = resume(q, first, c_q, params.spatial_k, reservoirs_out, sums, expected, ex)
         if n == NO_PIXEL:  # no neighbour j for this pixel (still a technique of the configured k)
             put(q, sh_q.valid, first, last, st_q, c_q, rng_uniform(key_q, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
-                reservoirs_out, sums, shifts, events)
+                reservoirs_out, sums, expected, ex, wp.static(normalized), shifts, events)
             return
         c_n = reservoirs_in[n]
         sh_n = load_shading(scene, gb, n)
-        st_n = resume(n, first, c_n, params.spatial_k, reservoirs_out, sums)
+        st_n = resume(n, first, c_n, params.spatial_k, reservoirs_out, sums, expected, ex)
         q_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_q, sh_n)
         n_uses = sh_q.valid != 0 and sh_n.valid != 0 and similar_surfaces(sh_n, sh_q)
         into_q = ShiftedIn()  # n's sample shifted to q
@@ -238,9 +261,9 @@ def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = Fals
                             rng_uniform(key_n, dim + wp.uint32(DI_SPATIAL_DIM_SELECT)),
                             rng_uniform(key_n, dim + wp.uint32(DI_SPATIAL_DIM_SHARE)))
         put(q, sh_q.valid, first, last, st_q, c_q, rng_uniform(key_q, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
-            reservoirs_out, sums, shifts, events)
+            reservoirs_out, sums, expected, ex, wp.static(normalized), shifts, events)
         put(n, sh_n.valid, first, last, st_n, c_n, rng_uniform(key_n, base + wp.uint32(DI_SPATIAL_DIM_CANONICAL)),
-            reservoirs_out, sums, shifts, events)
+            reservoirs_out, sums, expected, ex, wp.static(normalized), shifts, events)
 
     return reciprocal_spatial_kernel
 

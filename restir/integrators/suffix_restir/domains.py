@@ -18,6 +18,7 @@ def suffix_params(params: SRParams, P: int) -> PathReuseParams:
     p = params.pt
     p.max_depth = params.pt.max_depth - P
     p.first_event = 0
+    p.direct_nee = 0  # a suffix resamples every event from its start
     return p
 
 
