@@ -10,11 +10,12 @@ For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the pa
   error at an unchanged raw error, the denoiser kept the error's arrangement: structure at that
   scale. (Only the 2x2 shuffle keeps the raw error close: shuffled over larger blocks, a large
   relative error of a dark pixel lands on a bright one.)
-- `--phase regions`: each method's denoised error split between the band of pixels that see an
-  emitter directly (the emission seen directly, max_depth 1 at 256 spp, non-zero, widened by one
-  pixel) and the rest of the image, with the path tracer at 1-4 spp for the equal-time reading.
-  Inside the band the error is the primary rays' anti-aliasing, which path reuse cannot lower and
-  which the path tracer samples once per spp.
+- `--phase regions`: each method's error split by region: the band of pixels that see an emitter
+  directly (the emission seen directly, max_depth 1 at 256 spp, non-zero, widened by one pixel),
+  the geometric edges and the interior; and outside the band into the channels' mean and the
+  colour (each channel's deviation from the mean). With the path tracer at 1-4 spp for the
+  equal-time reading. Inside the band the error is the primary rays' anti-aliasing, which path
+  reuse cannot lower and which the path tracer samples once per spp.
 - `--phase jitter`: the same methods with the camera's filter offset on and off (pixel-centre
   rays, `RenderConfig.jitter`), each against its own reference; with the lag-1 correlation of
   horizontally neighbouring pixels' errors and F(8).
@@ -104,7 +105,17 @@ def phase_shuffle(scene, seed, out):
     out["shuffle"] = rows
 
 
+REGION_METHODS = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}), ("pt 3 spp", "pt", 3, {}),
+                  ("pt 4 spp", "pt", 4, {}), ("restir-pt, temporal only", "restir-pt", 1, {"spatial.rounds": 0}),
+                  ("restir-pt", "restir-pt", 1, {}), ("restir-pt, shade.expected", "restir-pt", 1, {"shade.expected": True}),
+                  ("restir-pt, shade.expected, direct=nee", "restir-pt", 1, {"shade.expected": True, "direct": "nee"})]
+
+
 def phase_regions(scene, seed, out):
+    """The error per region: the band of pixels that see an emitter, the geometric edges (where
+    the noise-free guides change between neighbours, widened by a pixel) and the interior; and the
+    error outside the band split into its mean over the channels (what the luminance carries) and
+    the channels' deviations from that mean (the colour's share)."""
     from scipy.ndimage import binary_dilation
 
     base = RenderConfig(method="pt", spp=1, frames=1, width=SIZE, height=SIZE)
@@ -113,19 +124,33 @@ def phase_regions(scene, seed, out):
                                              seed=7)).image
     band = binary_dilation(seen.max(-1) > 0.0, iterations=1)
     den = Denoiser.for_scene(scene, base)
-    w = 1.0 / (ref ** 2 + 0.01)  # relMSE's weight, per pixel and channel
-    rows = {"band_pixels": int(band.sum())}
-    methods = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}), ("pt 3 spp", "pt", 3, {}),
-               ("pt 4 spp", "pt", 4, {}), *METHODS[2:]]
-    for label, method, spp, settings in methods:
+    g = np.concatenate([den.albedo, den.normal], -1)
+    step = np.zeros(g.shape[:2])
+    step[:, 1:] = np.abs(g[:, 1:] - g[:, :-1]).max(-1)
+    step[1:] = np.maximum(step[1:], np.abs(g[1:] - g[:-1]).max(-1))
+    edges = binary_dilation(step > 0.05, iterations=1) & ~band
+    interior = ~band & ~edges
+    rest = ~band
+    scale = 1.0 / np.sqrt(ref ** 2 + 0.01)  # relMSE's weight is its square
+    rows = {"pixels": {"band": int(band.sum()), "edges": int(edges.sum()), "interior": int(interior.sum())}}
+    for label, method, spp, settings in REGION_METHODS:
         frames, ms = frames_of(scene, method, spp, settings, True, seed)
-        e = np.mean([((den(f) - ref) ** 2 * w).mean(-1) for f in frames], 0)
-        raw = np.mean([((f - ref) ** 2 * w).mean(-1) for f in frames], 0)
-        r = {"ms": ms, "raw": float(raw.mean()), "denoised": float(e.mean()), "denoised_band": float(e[band].sum() / e.size),
-             "denoised_rest": float(e[~band].sum() / e.size), "raw_rest": float(raw[~band].sum() / raw.size)}
+        r = {"ms": ms}
+        for kind, fs in (("raw", frames), ("denoised", [den(f) for f in frames])):
+            e = np.stack([(f - ref) * scale for f in fs])     # (frames, H, W, 3)
+            sq = (e ** 2).mean(-1).mean(0)                     # per pixel
+            r[kind] = float(sq.mean())
+            for name, mask in (("band", band), ("edges", edges), ("interior", interior)):
+                r[f"{kind}_{name}"] = float(sq[mask].sum() / sq.size)
+            er = e[:, rest]
+            mean = er.mean(-1, keepdims=True)
+            r[f"{kind}_rest_mean"] = float((mean[..., 0] ** 2).sum() / (len(fs) * sq.size))
+            r[f"{kind}_rest_colour"] = float(((er - mean) ** 2).mean(-1).sum() / (len(fs) * sq.size))
         rows[label] = r
-        print(f"{label:26s} {ms:.0f} ms/frame raw {r['raw']:.4f} denoised {r['denoised']:.5f} = band "
-              f"{r['denoised_band']:.5f} + rest {r['denoised_rest']:.5f} (raw rest {r['raw_rest']:.4f})", flush=True)
+        print(f"{label:38s} {ms:4.0f} ms | denoised {r['denoised']:.5f}: band {r['denoised_band']:.5f} edges "
+              f"{r['denoised_edges']:.5f} interior {r['denoised_interior']:.5f}; outside the band mean "
+              f"{r['denoised_rest_mean']:.5f} colour {r['denoised_rest_colour']:.5f} | raw {r['raw']:.4f}: outside "
+              f"the band mean {r['raw_rest_mean']:.4f} colour {r['raw_rest_colour']:.4f}", flush=True)
     out["regions"] = rows
 
 
