@@ -52,3 +52,11 @@ def test_no_drift_over_many_frames():
 def test_no_drift_over_many_frames_slow():
     check_no_trend(*long_run_trend(seeds=16, frames=5000, batch=100, scene=sphere(), method="restir-pt",
                                    max_depth=DEPTH, settings=LONG))
+
+
+@pytest.mark.slow
+def test_no_drift_with_direct_nee_and_expected_shading():
+    """L2 for direct=nee (the reservoirs resample from x_1) with shade.expected (the image from
+    the last pass's expectation), over the long run's settings."""
+    check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50, scene=sphere(), method="restir-pt",
+                                   max_depth=DEPTH, settings={**LONG, "direct": "nee", "shade.expected": True}))
