@@ -292,3 +292,14 @@ def test_split_stages_refuse_fault_injections():
     cfg = restir.RenderConfig(method="restir-pt", settings={"stages.split": True, "debug.mutation": "m_per_event"})
     with pytest.raises(restir.ConfigError, match="stages.split"):
         restir.render(scene, cfg)
+
+
+def test_option_combinations_refused_before_rendering():
+    """shade.expected needs a resampling pass last (an MCMC pass last has no expectation built);
+    direct=nee is ReSTIR PT's (Suffix ReSTIR's prefixes already sum their own light)."""
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    with pytest.raises(restir.ConfigError, match="shade.expected needs"):
+        restir.render(scene, restir.RenderConfig(method="restir-pt", settings={
+            "shade.expected": True, "mcmc.steps": 1, "spatial.rounds": 0}))
+    with pytest.raises(restir.ConfigError, match="direct must be restir-di or pt"):
+        restir.render(scene, restir.RenderConfig(method="suffix-restir", settings={"direct": "nee"}))
