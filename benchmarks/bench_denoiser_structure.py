@@ -107,7 +107,8 @@ def phase_shuffle(scene, seed, out):
 
 REGION_METHODS = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}), ("pt 3 spp", "pt", 3, {}),
                   ("pt 4 spp", "pt", 4, {}), ("restir-pt, temporal only", "restir-pt", 1, {"spatial.rounds": 0}),
-                  ("restir-pt", "restir-pt", 1, {}), ("restir-pt, shade.expected", "restir-pt", 1, {"shade.expected": True}),
+                  ("restir-pt", "restir-pt", 1, {}),
+                  ("restir-pt, shade.expected", "restir-pt", 1, {"shade.expected": True}),
                   ("restir-pt, shade.expected, direct=nee", "restir-pt", 1, {"shade.expected": True, "direct": "nee"}),
                   ("pt 8 spp", "pt", 8, {}), ("suffix-restir", "suffix-restir", 1, {})]
 

@@ -60,8 +60,9 @@ def main():
     ap.add_argument("--methods", nargs="*", help="methods to compare on every scene, 'name:key=value,...' "
                     "(default: the scene's own list)")
     ap.add_argument("--out", default="out/bench_error_structure.json")
-    ap.add_argument("--no-jitter", dest="jitter", action="store_false", help="pixel-centre primary rays for every "
-                    "method and the reference (RenderConfig.jitter): no anti-aliasing noise, each pixel one primary hit")
+    ap.add_argument("--no-jitter", dest="jitter", action="store_false",
+                    help="pixel-centre primary rays for every method and the reference (RenderConfig.jitter): no "
+                    "anti-aliasing noise, each pixel one primary hit")
     ap.add_argument("--report", metavar="DIR", help="also write each scene's HTML report into DIR/<scene>")
     args = ap.parse_args()
     rows = []

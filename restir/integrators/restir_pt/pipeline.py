@@ -57,8 +57,9 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
     # direct light counted twice
     "nee_also_resampled": None,
     # shade.expected: the reciprocal spatial pass's expected output not divided by V + 1
-    "expected_unnormalized": lambda: (trace_temporal_kernel, mcmc_kernel, spatial_kernel, make_reciprocal_spatial_kernel(
-        expected_unnormalized=True, module="restir_pt_expected_unnormalized")),
+    "expected_unnormalized": lambda: (
+        trace_temporal_kernel, mcmc_kernel, spatial_kernel,
+        make_reciprocal_spatial_kernel(expected_unnormalized=True, module="restir_pt_expected_unnormalized")),
 })
 
 
