@@ -91,9 +91,11 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
     dist_in = float(0.0)     # |x_k - x_{k-1}|
     k = int(0)
     while k + 2 <= params.max_depth:
-        # ---- NEE at x_k: an event of length k
+        # x_k's events are resampled (k >= first_event) or, with direct=nee at x_0, summed
+        resampled = k >= params.first_event
         summed = params.direct_nee != 0 and k == 0
-        if (k >= params.first_event or summed) and bsdf_is_delta_only(mat) == 0:
+        # ---- NEE at x_k: an event of length k
+        if (resampled or summed) and bsdf_is_delta_only(mat) == 0:
             c = nee_at(scene, hit, mat, frame, wi, seed, wp.uint32(0), k, 1, STRATEGY_MIS)
             out.rays += c.rays
             F = wp.cw_mul(beta, c.L)
@@ -101,10 +103,10 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
                 out.direct += F * scale
             p_hat = luminance(F)
             index = index_base + PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_NEE
-            if k >= params.first_event:
+            if resampled:
                 out.s = ris_stream(out.s, p_hat * scale, p_hat, 0.0, index, rng_uniform(ris_key, wp.uint32(
                     PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_NEE)))
-            if k >= params.first_event and out.s.selected == index:
+            if resampled and out.s.selected == index:
                 if rc_len != NO_RC:
                     out.r = event_record(F, pack_flags(k, rc_len, lobe_prev_rc, lobe_rc, 1, RC_SURFACE), seed, rc_tri,
                                          rc_bary, rc_wi, wp.cw_mul(beta_rc, c.L), rc_jac, c.p_light)
@@ -149,17 +151,17 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
             # two vertices (rc_criteria.segment)
             jac_next = wp.abs(wp.dot(nh.ng, fd.dir)) / (dist * dist) * bsdf_pdf_lobes(mat, wi, to_local(frame, fd.dir),
                                                                                         sc.bs.lobe)
-        if params.direct_nee != 0 and k == 0 and max3(Le) > 0.0:
-            out.direct += wp.cw_mul(beta, Le) * (emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1,
-                                                                     STRATEGY_MIS) * scale)
-        if k >= params.first_event and max3(Le) > 0.0:
+        if (resampled or summed) and max3(Le) > 0.0:
             mis = emission_mis_weight(sc.bs.is_delta, sc.bs.pdf, p_light, 1, STRATEGY_MIS)
             F = wp.cw_mul(beta, Le) * mis
+            if summed:
+                out.direct += F * scale
             p_hat = luminance(F)
             index = index_base + PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_EMISSION
-            out.s = ris_stream(out.s, p_hat * scale, p_hat, 0.0, index, rng_uniform(ris_key, wp.uint32(
-                PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_EMISSION)))
-            if out.s.selected == index:
+            if resampled:
+                out.s = ris_stream(out.s, p_hat * scale, p_hat, 0.0, index, rng_uniform(ris_key, wp.uint32(
+                    PT_RIS_DIMS_PER_VERTEX * k + PT_RIS_DIM_EMISSION)))
+            if resampled and out.s.selected == index:
                 if rc_len != NO_RC and rc_len < k:
                     out.r = event_record(F, pack_flags(k, rc_len, lobe_prev_rc, lobe_rc, 0, RC_SURFACE), seed, rc_tri,
                                          rc_bary, rc_wi, wp.cw_mul(beta_rc, Le) * mis, rc_jac, p_light)

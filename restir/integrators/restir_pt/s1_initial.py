@@ -66,6 +66,15 @@ def make_initial_reservoir(m_per_event: bool = False):
 initial_reservoir = make_initial_reservoir()
 
 
+@wp.func
+def store_direct(params: PathReuseParams, pixel: int, summed: wp.vec3, emission: wp.array(dtype=wp.vec3),
+                 primary_weight: wp.array(dtype=float), direct: wp.array(dtype=wp.vec3)):
+    """direct=nee: the pixel's direct light for the shade stage, the emission seen directly plus
+    the base paths' summed events at x_0 times the filter weight (with another `direct`, nothing)."""
+    if params.direct_nee != 0:
+        direct[pixel] = emission[pixel] + summed * primary_weight[pixel]
+
+
 @wp.kernel(module=SPLIT_MODULE)
 def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb: GBuffer,
                    emission: wp.array(dtype=wp.vec3), primary_weight: wp.array(dtype=float),
@@ -75,6 +84,5 @@ def initial_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, gb:
     pixel = wp.tid() + offset
     r, ev, d = initial_reservoir(scene, params, load_shading(scene, gb, pixel), pixel)
     reservoirs[pixel] = r
-    if params.direct_nee != 0:
-        direct[pixel] = emission[pixel] + d * primary_weight[pixel]
+    store_direct(params, pixel, d, emission, primary_weight, direct)
     events[pixel] = packed_events(ev)

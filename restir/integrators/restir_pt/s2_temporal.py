@@ -37,7 +37,7 @@ from ..path_reuse.path_sample import PathReservoir, sample_output, store
 from ..path_reuse.reuse_pair import make_reuse_pair
 from ..path_reuse.shift import SHIFT_INLINED
 from .kernel_module import KERNEL_MODULE, SPLIT_MODULE
-from .s1_initial import make_initial_reservoir
+from .s1_initial import make_initial_reservoir, store_direct
 
 _built: dict = {}
 
@@ -45,8 +45,8 @@ _built: dict = {}
 def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=None):
     """The stage's work for one pixel as a function: (reservoir, shift counts, events, expected
     output) from the pixel's new reservoir c and shading point sc; the expected output is the
-    pass's (Reuse.L), or c's own F W where no history was resampled. drop_failed builds the mutation that drops a
-    history whose shift failed (its M and its density in the current sample's weight). Built once
+    pass's (Reuse.L), or c's own F W where no history was resampled. drop_failed builds the
+    mutation that drops a history whose shift failed (its M and its density in the current sample's weight). Built once
     per (shift, drop_failed, module): the split and the fused kernels call the same function."""
     if (shift, drop_failed, module) in _built:
         return _built[shift, drop_failed, module]
@@ -121,8 +121,7 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
         pixel = wp.tid() + offset
         sc = load_shading(scene, gb, pixel)
         c, ev, d = initial(scene, params, sc, pixel)
-        if params.direct_nee != 0:  # stage 1's own output (s1_initial.py)
-            direct[pixel] = emission[pixel] + d * primary_weight[pixel]
+        store_direct(params, pixel, d, emission, primary_weight, direct)  # stage 1's own output
         n = wp.vec4i(0)
         L = sample_output(c)
         if temporal != 0:
