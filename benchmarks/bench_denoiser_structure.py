@@ -15,7 +15,8 @@ For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the pa
   the geometric edges and the interior; and outside the band into the channels' mean and the
   colour (each channel's deviation from the mean). With the path tracer at 1-4 spp for the
   equal-time reading. Inside the band the error is the primary rays' anti-aliasing, which path
-  reuse cannot lower and which the path tracer samples once per spp.
+  reuse cannot lower and which the path tracer samples once per spp; and rows with
+  `emission.rays` (that term from more camera rays). `--rows LABEL ...` runs only those rows.
 - `--phase jitter`: the same methods with the camera's filter offset on and off (pixel-centre
   rays, `RenderConfig.jitter`), each against its own reference; with the lag-1 correlation of
   horizontally neighbouring pixels' errors and F(8).
@@ -110,10 +111,19 @@ REGION_METHODS = [("pt 1 spp", "pt", 1, {}), ("pt 2 spp", "pt", 2, {}), ("pt 3 s
                   ("restir-pt", "restir-pt", 1, {}),
                   ("restir-pt, shade.expected", "restir-pt", 1, {"shade.expected": True}),
                   ("restir-pt, shade.expected, direct=nee", "restir-pt", 1, {"shade.expected": True, "direct": "nee"}),
-                  ("pt 8 spp", "pt", 8, {}), ("suffix-restir", "suffix-restir", 1, {})]
+                  ("pt 8 spp", "pt", 8, {}), ("suffix-restir", "suffix-restir", 1, {}),
+                  # the emission seen directly from more camera rays (common/primary_hits.py)
+                  ("pt 2 spp, emission.rays=2", "pt", 2, {"emission.rays": 2}),
+                  ("restir-pt, emission.rays=2", "restir-pt", 1, {"emission.rays": 2}),
+                  ("restir-pt, emission.rays=4", "restir-pt", 1, {"emission.rays": 4}),
+                  ("restir-pt, temporal only, emission.rays=4", "restir-pt", 1,
+                   {"spatial.rounds": 0, "emission.rays": 4}),
+                  ("restir-pt, emission.rays=4, shade.expected, direct=nee", "restir-pt", 1,
+                   {"emission.rays": 4, "shade.expected": True, "direct": "nee"}),
+                  ("suffix-restir, emission.rays=8", "suffix-restir", 1, {"emission.rays": 8})]
 
 
-def phase_regions(scene, seed, out):
+def phase_regions(scene, seed, out, rows_wanted=None):
     """The error per region: the band of pixels that see an emitter, the geometric edges (where
     the noise-free guides change between neighbours, widened by a pixel) and the interior; and the
     error outside the band split into its mean over the channels (what the luminance carries) and
@@ -136,6 +146,8 @@ def phase_regions(scene, seed, out):
     scale = 1.0 / np.sqrt(ref ** 2 + 0.01)  # relMSE's weight is its square
     rows = {"pixels": {"band": int(band.sum()), "edges": int(edges.sum()), "interior": int(interior.sum())}}
     for label, method, spp, settings in REGION_METHODS:
+        if rows_wanted and label not in rows_wanted:
+            continue
         frames, ms = frames_of(scene, method, spp, settings, True, seed)
         r = {"ms": ms}
         for kind, fs in (("raw", frames), ("denoised", [den(f) for f in frames])):
@@ -181,10 +193,14 @@ def main():
     ap.add_argument("--scene", default="builtin:indirect-room")
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--json", help="write the rows here")
+    ap.add_argument("--rows", nargs="*", help="regions: only these rows (their labels, as printed)")
     args = ap.parse_args()
     scene = restir.load_scene(args.scene)
     out = {"scene": args.scene, "seed": args.seed}
-    {"shuffle": phase_shuffle, "jitter": phase_jitter, "regions": phase_regions}[args.phase](scene, args.seed, out)
+    if args.phase == "regions":
+        phase_regions(scene, args.seed, out, args.rows)
+    else:
+        {"shuffle": phase_shuffle, "jitter": phase_jitter}[args.phase](scene, args.seed, out)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as f:

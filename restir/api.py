@@ -250,6 +250,7 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
     settings = dataclasses.replace(settings, seed=config.seed, spp=config.spp or scene.spp, max_depth=max_depth,
                                    camera_motion=config.camera_motion, camera_speed=config.camera_speed,
                                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
+    settings.check_common()
     cls.check_settings(settings)
     try:
         dscene = DeviceScene(scene, config.device, config.tracer, config.jitter)

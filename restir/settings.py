@@ -10,14 +10,16 @@ are built: a change compiles other code) or runtime (a value the kernels read).
 A method names its class (`Integrator.Settings`); the integrator reads `self.settings.candidates`.
 Every settings object also holds the render's own settings (seed, spp, max_depth, camera motion,
 the scene's Russian-roulette depth and hide_emitters), filled by the API from the RenderConfig
-and the scene, never by `--set`. A component's settings nest under a prefix (`di.*`:
-`component(...)`), so `--set di.candidates=8` reaches `settings.di.candidates`.
+and the scene, never by `--set`; and one `--set` setting every method has, `emission.rays`. A
+component's settings nest under a prefix (`di.*`: `component(...)`), so `--set di.candidates=8`
+reaches `settings.di.candidates`.
 """
 import dataclasses
 import functools
 
 from .config import ConfigError, parse_value
 
+MAX_EMISSION_RAYS = 64  # emission.rays: camera rays per sample for the emission seen directly
 MUTATION_DOC = "fault injection for the mutation tests (biased; the harness refuses it)"  # debug.mutation
 
 
@@ -100,6 +102,10 @@ class Settings(SettingsGroup):
     camera_speed: float = 1.0
     rr_depth: int = 5
     hide_emitters: bool = False
+    # a --set setting every method has: where the primary rays are traced (common/primary_hits.py)
+    emission_rays: int = setting("emission.rays", 1, "camera rays per pixel sample that estimate the emission "
+                                 "seen directly (the sample's own and n - 1 more spread over the pixel); the rest "
+                                 "of the path starts at the sample's own hit")
 
     # ------------------------------------------------------------------ building and reading
     @classmethod
@@ -115,12 +121,17 @@ class Settings(SettingsGroup):
             _set(out, path, parse_value(value, default) if isinstance(value, str) else value)
         return out
 
+    def check_common(self) -> None:
+        """The --set settings every method has, refused before anything is built."""
+        if not 1 <= self.emission_rays <= MAX_EMISSION_RAYS:
+            raise ConfigError(f"emission.rays must be in [1, {MAX_EMISSION_RAYS}]")
+
     def as_dict(self) -> dict:
         """{key: value} of every `--set` setting, then the render's (the stats' "settings")."""
         return {**{key: _get(self, path) for key, path, _, _, _ in self.entries()}, **self.render_settings()}
 
     def render_settings(self) -> dict:
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(Settings)}
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(Settings) if "key" not in f.metadata}
 
 
 def _get(obj, path):

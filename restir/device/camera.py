@@ -88,9 +88,25 @@ def camera_ray(cam: Camera, seed: wp.uint32, frame: wp.uint32, pixel: int, sampl
     camera stream (stage STAGE_CAMERA), so renders with the same seed share their camera
     samples: comparisons between methods can use common random numbers (the directly seen
     emission, the same estimator everywhere, then cancels out of the difference)."""
+    return generate_ray(cam, pixel % cam.width, pixel // cam.width, camera_u(seed, frame, pixel, sample))
+
+
+@wp.func
+def camera_u(seed: wp.uint32, frame: wp.uint32, pixel: int, sample: int) -> wp.vec2:
+    """The two uniform numbers camera_ray turns into the sample's position in the pixel."""
     key = rng_key(seed, frame, wp.uint32(STAGE_CAMERA), wp.uint32(pixel))
-    return generate_ray(cam, pixel % cam.width, pixel // cam.width,
-                        rng_uniform2(key, wp.uint32(2) * wp.uint32(sample)))
+    return rng_uniform2(key, wp.uint32(2) * wp.uint32(sample))
+
+
+@wp.func
+def lattice_u(u: wp.vec2, j: int, n: int) -> wp.vec2:
+    """Point j of n of a lattice shifted by u (point 0 is u itself), modulo 1: the positions of the
+    `emission.rays` camera rays of a sample. Each point is uniform because u is, so each ray's
+    emission is an unbiased estimate of the pixel's; the lattice spreads the n rays over the pixel
+    (stratified along both axes: j / n, and j times the golden ratio's fractional part)."""
+    g = wp.vec2(float(j) / float(n), float(j) * 0.6180339887498949)
+    x = u + g
+    return wp.vec2(x[0] - wp.floor(x[0]), x[1] - wp.floor(x[1]))
 
 
 @wp.func

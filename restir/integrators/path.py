@@ -22,7 +22,7 @@ import warp as wp
 
 from ..device.bounce import bounce_dim, material_at, nee_at, scatter_at, shading_frame
 from ..device.bsdf import bsdf_is_delta_only
-from ..device.camera import Camera, camera_ray
+from ..device.camera import Camera, camera_u, generate_ray
 from ..device.color import max3
 from ..device.intersect import T_MAX, trace_closest
 from ..device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
@@ -36,6 +36,7 @@ from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import EventCounts, output_events, packed_events, ray_events
+from .common.primary_hits import emission_seen, lattice_emission
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
@@ -53,12 +54,14 @@ class PTParams:
     strategy: int
     hide_emitters: int
     nee_samples: int   # light samples per vertex, N
+    emission_rays: int  # camera rays per sample for the emission seen directly (common/primary_hits.py)
 
 
 @wp.struct
 class PathResult:
     L: wp.vec3
     rays: int
+    Le0: wp.vec3  # the emission seen directly, left out of L when emission.rays > 1 (the kernel averages it)
 
 
 def make_path_trace_kernel(several_light_samples: bool):
@@ -81,11 +84,15 @@ def make_path_trace_kernel(several_light_samples: bool):
         prev_delta = int(1)
         eta = float(1.0)
         max_depth = wp.where(params.max_depth < 0, MAX_SEGMENTS, wp.min(params.max_depth, MAX_SEGMENTS))
+        Le0 = wp.vec3(0.0)
         depth = int(0)
         while True:
             hit = trace_closest(scene, o, d, T_MAX)
             rays += 1
             visible_emitter = not (params.hide_emitters != 0 and depth == 0)
+            if depth == 0 and visible_emitter and params.emission_rays > 1:
+                Le0 = emission_seen(scene, hit, d)  # the kernel averages it with the other rays'
+                visible_emitter = False
             # ---- escaped: environment emission
             if hit.valid == 0:
                 if scene.env_kind != ENV_NONE and visible_emitter:
@@ -139,6 +146,7 @@ def make_path_trace_kernel(several_light_samples: bool):
         res = PathResult()
         res.L = L
         res.rays = rays
+        res.Le0 = Le0
         return res
 
     @wp.kernel
@@ -161,10 +169,16 @@ def make_path_trace_kernel(several_light_samples: bool):
         rays = int(0)
         for s in range(params.sample_begin, params.sample_end):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
-            ray = camera_ray(camera, params.seed, params.frame, pixel, s)
+            u = camera_u(params.seed, params.frame, pixel, s)
+            ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, u)
             res = path_radiance(scene, params, ray.o, ray.d, wp.uint32(pixel), key, base)
             rays += res.rays
-            acc = welford_add(acc, res.L * ray.weight)
+            L = res.L * ray.weight
+            if params.emission_rays > 1 and params.hide_emitters == 0:
+                Le = lattice_emission(scene, camera, pixel, u, params.emission_rays)
+                L += (res.Le0 * ray.weight + Le) / float(params.emission_rays)
+                rays += params.emission_rays - 1
+            acc = welford_add(acc, L)
         frame_mean[pixel] = acc.mean
         frame_m2[pixel] = acc.m2
         if params.sample_end == params.spp:  # a non-finite mean is counted once, when the frame is done
@@ -222,6 +236,7 @@ class PathTracer(Integrator):
         p.strategy = int(STRATEGIES[s.strategy])
         p.hide_emitters = int(bool(s.hide_emitters))
         p.nee_samples = int(s.nee_samples)
+        p.emission_rays = int(s.emission_rays)
         return p
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch

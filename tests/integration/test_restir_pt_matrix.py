@@ -53,6 +53,9 @@ MATRIX = {
     "C4-expected": ({"shade.expected": True}, "none"),
     "C4-expected-nee-orbit": ({"shade.expected": True, "direct": "nee"}, "orbit"),
     "C2-expected-nee": ({"shade.expected": True, "direct": "nee", **TEMPORAL}, "none"),
+    # emission.rays: the emission seen directly from four camera rays a sample (every stage on)
+    "C4-emission-rays": ({"emission.rays": 4}, "none"),
+    "C4-emission-rays-orbit": ({"emission.rays": 4, "shade.expected": True, "direct": "nee"}, "orbit"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     # reciprocal neighbours (spatial.reciprocal, the default): the pass on its own, several rounds
     "C3-reciprocal-k3": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True}, "none"),

@@ -56,6 +56,9 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
     # direct=nee whose trace stage also resamples the events at x_0 it sums (first_event 0):
     # direct light counted twice
     "nee_also_resampled": None,
+    # emission.rays: the extra camera rays at the lattice's points unshifted by the sample's
+    # position (common/primary_hits.py builds that stage's kernel with the defect)
+    "emission_lattice_fixed": None,
     # shade.expected: the reciprocal spatial pass's expected output not divided by V + 1
     "expected_unnormalized": lambda: (
         trace_temporal_kernel, mcmc_kernel, spatial_kernel,
