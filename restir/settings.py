@@ -20,6 +20,8 @@ import functools
 from .config import ConfigError, parse_value
 
 MAX_EMISSION_RAYS = 64  # emission.rays: camera rays per sample for the emission seen directly
+EMISSION_RAYS_DOC = ("camera rays per pixel sample that estimate the emission seen directly (the sample's own "
+                     "and n - 1 more spread over the pixel); the rest of the path starts at the sample's own hit")
 MUTATION_DOC = "fault injection for the mutation tests (biased; the harness refuses it)"  # debug.mutation
 
 
@@ -103,9 +105,7 @@ class Settings(SettingsGroup):
     rr_depth: int = 5
     hide_emitters: bool = False
     # a --set setting every method has: where the primary rays are traced (common/primary_hits.py)
-    emission_rays: int = setting("emission.rays", 1, "camera rays per pixel sample that estimate the emission "
-                                 "seen directly (the sample's own and n - 1 more spread over the pixel); the rest "
-                                 "of the path starts at the sample's own hit")
+    emission_rays: int = setting("emission.rays", 1, EMISSION_RAYS_DOC)
 
     # ------------------------------------------------------------------ building and reading
     @classmethod

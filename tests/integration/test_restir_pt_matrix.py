@@ -26,7 +26,11 @@ TEMPORAL = {"spatial.rounds": 0}
 # The defaults until 2026-12-06 (the official ones, with independent neighbours): every cell but
 # the defaults' own keeps them, so the verdicts in VALIDATION.md stay those of the configuration
 # each cell ran.
-OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0, "spatial.reciprocal": False}
+OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0, "spatial.reciprocal": False, "emission.rays": 1}
+# The emission seen directly from one camera ray a sample, the default until emission.rays became
+# 4 (2026-12-07): the cells recorded before then keep it; C4-defaults, -orbit, -dolly and -centre
+# take the defaults as they are.
+ONE_RAY = {"emission.rays": 1}
 
 MATRIX = {
     "C1-candidates-1": ({**OFFICIAL, **NO_REUSE}, "none"),
@@ -47,14 +51,13 @@ MATRIX = {
     "C4-cap-5": ({**OFFICIAL, "temporal.cap": 5.0}, "none"),
     "C4-direct-pt": ({**OFFICIAL, "direct": "pt"}, "none"),
     # direct=nee: the base paths' events at x_0 summed, resampling from x_1 (every stage on)
-    "C4-direct-nee": ({"direct": "nee"}, "none"),
-    "C4-direct-nee-orbit": ({"direct": "nee"}, "orbit"),
+    "C4-direct-nee": ({"direct": "nee", **ONE_RAY}, "none"),
+    "C4-direct-nee-orbit": ({"direct": "nee", **ONE_RAY}, "orbit"),
     # shade.expected: the image from the last pass's expected output (spatial, temporal)
-    "C4-expected": ({"shade.expected": True}, "none"),
-    "C4-expected-nee-orbit": ({"shade.expected": True, "direct": "nee"}, "orbit"),
-    "C2-expected-nee": ({"shade.expected": True, "direct": "nee", **TEMPORAL}, "none"),
-    # emission.rays: the emission seen directly from four camera rays a sample (every stage on)
-    "C4-emission-rays": ({"emission.rays": 4}, "none"),
+    "C4-expected": ({"shade.expected": True, **ONE_RAY}, "none"),
+    "C4-expected-nee-orbit": ({"shade.expected": True, "direct": "nee", **ONE_RAY}, "orbit"),
+    "C2-expected-nee": ({"shade.expected": True, "direct": "nee", **TEMPORAL, **ONE_RAY}, "none"),
+    # emission.rays 4 (the default) with both options above, orbiting
     "C4-emission-rays-orbit": ({"emission.rays": 4, "shade.expected": True, "direct": "nee"}, "orbit"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     # reciprocal neighbours (spatial.reciprocal, the default): the pass on its own, several rounds
@@ -63,8 +66,8 @@ MATRIX = {
                                    "spatial.rounds": 2}, "none"),
     # the defaults with independent neighbours (the defaults before reciprocal ones; cells
     # C4-defaults and -orbit until then)
-    "C4-independent": ({"spatial.reciprocal": False}, "none"),
-    "C4-independent-orbit": ({"spatial.reciprocal": False}, "orbit"),
+    "C4-independent": ({"spatial.reciprocal": False, **ONE_RAY}, "none"),
+    "C4-independent-orbit": ({"spatial.reciprocal": False, **ONE_RAY}, "orbit"),
     # MCMC suffix mutations between temporal and spatial reuse (s3_mcmc.py)
     "C6-mcmc-z": ({**OFFICIAL, "mcmc.steps": 2}, "none"),
     "C6-mcmc-rc-prev": ({**OFFICIAL, "mcmc.steps": 2, "mcmc.start": "rc_prev"}, "none"),

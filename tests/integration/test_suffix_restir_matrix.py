@@ -23,7 +23,11 @@ NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.
 # direct=pt became it (BENCHMARKS.md, "Suffix ReSTIR's direct light"). The cells that test one
 # stage or option keep it, as they were validated (VALIDATION.md); the defaults' cells (C5-all,
 # -orbit, -dolly, -centre, C5-all-N128) take direct=pt, and C5-official is the old C5-all.
-OFFICIAL = {"direct": "restir-di"}
+OFFICIAL = {"direct": "restir-di", "emission.rays": 1}
+# The emission seen directly from one camera ray a sample, the default until emission.rays became
+# 8 (2026-12-07): cells recorded before then keep it; C5-all, -orbit, -dolly and -centre take the
+# defaults as they are.
+ONE_RAY = {"emission.rays": 1}
 MATRIX = {
     **{f"C5-gather-N{n}-M{m}": ({**OFFICIAL, **NO_REUSE, "gather.prefixes": n, "gather.suffixes": m}, "none")
        for n in (1, 2, 4) for m in (1, 4, 8)},
@@ -63,7 +67,7 @@ def test_suffix_restir_matrix(name, config):
 
 # N = 128 gathered prefixes, the paper's largest, with every reuse on: on the scenes where a cell
 # costs minutes (at 32x32 a frame traces about 1,500 gather rays a pixel)
-MANY_PREFIXES = {"C5-all-N128": ({"gather.prefixes": 128}, "none")}
+MANY_PREFIXES = {"C5-all-N128": ({"gather.prefixes": 128, **ONE_RAY}, "none")}
 
 
 @pytest.mark.slow

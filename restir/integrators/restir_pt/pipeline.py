@@ -11,7 +11,7 @@ import numpy as np
 import warp as wp
 
 from ...device.streams import PT_MAX_MCMC_STEPS, PT_MAX_NEIGHBORS
-from ...settings import MUTATION_DOC, setting
+from ...settings import EMISSION_RAYS_DOC, MUTATION_DOC, setting
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -76,8 +76,15 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 # neighbours"): half the spatial shifts, frames 7-14% cheaper at 128 lines and 15-19% at 512, less
 # denoised error in 5 of 8 runs (geometric mean 3.54x the path tracer's against 3.77x), less
 # correlated in 7 of 8, lower accumulated error in all 8.
+# And emission.rays 4 (every other method's default is 1): the emitter's edge seen directly,
+# sampled by one ray a frame, was the largest error the denoiser left on the glossy Cornell box,
+# and path reuse cannot lower it. With four rays the defaults went from 1.09x and 1.25x above the
+# path tracer at equal time after the denoiser there to 1.21x and 1.16x below it, with the other
+# scenes unchanged (no emitter in view) and the frame 3-4% dearer (BENCHMARKS.md, "The emission
+# seen directly from more camera rays").
 @dataclasses.dataclass
 class PTSettings(PathReuseSettings):
+    emission_rays: int = setting("emission.rays", 4, EMISSION_RAYS_DOC)
     direct: str = setting("direct", "pt", "pt: the method's paths own every event, direct light included; "
                           "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings; the "
                           "official ReSTIR PT's choice); nee: the base paths' events at the primary hit summed as "

@@ -12,7 +12,7 @@ import numpy as np
 import warp as wp
 
 from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
-from ...settings import MUTATION_DOC, setting
+from ...settings import EMISSION_RAYS_DOC, MUTATION_DOC, setting
 from ..common.events import PassCounts
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
@@ -56,8 +56,14 @@ SPATIAL_RADIUS_1080 = 30.0
 # component: frames 6-13% cheaper, level after the denoiser (within 4% either way over two seeds on
 # three scenes; on Veach Ajar, whose direct light at the primary hits is 0.15% of the image, the
 # same), accumulated error lower or equal in every run, 60 bytes a pixel less.
+# And emission.rays 8: a frame costs 6-9 path-tracer samples but traced one camera ray for the
+# emission seen directly; with eight, the glossy Cornell box's denoised error at equal time went
+# from 1.72x and 1.96x the path tracer's to 1.16x and 1.13x (two seeds; four rays: 1.31x, 1.32x),
+# the frame's time unchanged within the measurement's noise at 512 lines (BENCHMARKS.md, "The
+# emission seen directly from more camera rays").
 @dataclasses.dataclass
 class SuffixSettings(PathReuseSettings):
+    emission_rays: int = setting("emission.rays", 8, EMISSION_RAYS_DOC)
     direct: str = setting("direct", "pt", "pt: the method's paths own every event, direct light included; "
                           "restir-di: direct light at the primary hit from ReSTIR DI (the di.* settings; the "
                           "official prototype's choice)")
