@@ -36,7 +36,7 @@ from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import EventCounts, output_events, packed_events, ray_events
-from .common.primary_hits import emission_seen, lattice_emission
+from .common.primary_hits import emission_rays, emission_seen, lattice_emission
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
@@ -236,7 +236,7 @@ class PathTracer(Integrator):
         p.strategy = int(STRATEGIES[s.strategy])
         p.hide_emitters = int(bool(s.hide_emitters))
         p.nee_samples = int(s.nee_samples)
-        p.emission_rays = int(s.emission_rays)
+        p.emission_rays = emission_rays(self)
         return p
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch

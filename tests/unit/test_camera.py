@@ -138,3 +138,19 @@ def test_the_fixed_lattice_mutation_is_caught():
                                           settings={"emission.rays": "4", "debug.mutation": "emission_lattice_fixed"}))
     z, _ = _z_against_quadrature(scene, r)
     assert abs(z) > 20.0, z
+
+
+def test_emission_rays_without_jitter_trace_one_ray():
+    """With pixel-centre rays every one of the emission.rays would be the sample's own: one is
+    traced, and the image is the one-ray image bit for bit."""
+    for method in ("pt", "restir-pt"):
+        one, four = (_render_centred(method, n) for n in (1, 4))
+        np.testing.assert_array_equal(one.image, four.image)
+        stage = "path_trace" if method == "pt" else "gbuffer"
+        assert four.stats["rays_by_stage"][stage] == one.stats["rays_by_stage"][stage] == 8 * 8 * 2
+
+
+def _render_centred(method, n):
+    scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
+    return restir.render(scene, RenderConfig(method=method, spp=2, frames=1, max_depth=1, seed=4, jitter=False,
+                                             settings={"emission.rays": str(n)}))

@@ -92,6 +92,13 @@ def fixed_lattice_kernel():
     return _fixed_lattice_kernel[0]
 
 
+def emission_rays(integrator) -> int:
+    """The camera rays a sample traces for the emission seen directly: the `emission.rays`
+    setting, or 1 with pixel-centre rays (RenderConfig.jitter off), where every ray would be the
+    sample's own."""
+    return int(integrator.settings.emission_rays) if integrator.dscene.jitter else 1
+
+
 def trace_primary_hits(integrator, camera, seed, frame, sample: int, hide_emitters: int, gb: GBuffer, weight,
                        emission, kernel=None) -> None:
     """The stage for one sample, timed as "gbuffer": gb takes the camera's position (the rays its
@@ -99,4 +106,4 @@ def trace_primary_hits(integrator, camera, seed, frame, sample: int, hide_emitte
     set_camera_origin(gb, camera)
     integrator.run_stage("gbuffer", kernel or primary_hits_kernel,
                          [integrator.dscene.scene, camera, seed, frame, sample, hide_emitters,
-                          int(integrator.settings.emission_rays)], [gb, weight, emission])
+                          emission_rays(integrator)], [gb, weight, emission])
