@@ -103,7 +103,7 @@ def lattice_u(u: wp.vec2, j: int, n: int) -> wp.vec2:
     """Point j of n of a lattice shifted by u (point 0 is u itself), modulo 1: the positions of the
     `emission.rays` camera rays of a sample. Each point is uniform because u is, so each ray's
     emission is an unbiased estimate of the pixel's; the lattice spreads the n rays over the pixel
-    (stratified along both axes: j / n, and j times the golden ratio's fractional part)."""
+    (j / n along x, one point per stratum; j times the golden ratio's fractional part along y)."""
     g = wp.vec2(float(j) / float(n), float(j) * 0.6180339887498949)
     x = u + g
     return wp.vec2(x[0] - wp.floor(x[0]), x[1] - wp.floor(x[1]))

@@ -11,7 +11,9 @@ three estimators of the same integral used to cross-check each other. `nee.sampl
 samples are taken at every vertex (Mitsuba's `direct` integrator calls them emitter samples);
 with MIS they are combined with the one BSDF sample by the balance heuristic over
 N p_light + p_bsdf. Sample 0 uses the path's own stream; sample j > 0 the stream of stage
-STAGE_PATH_NEE + j, so images with one light sample do not change.
+STAGE_PATH_NEE + j, so images with one light sample do not change. With `emission.rays` n > 1
+the emission seen directly is the mean over the sample's camera ray and n - 1 more
+(common/primary_hits.py), and the path's own hit contributes to that mean, not to L.
 The path's steps (light connection, emission MIS weight, scattering, Russian roulette) are the
 device functions of device/path_steps.py, which ReSTIR PT's base path and replay also call.
 """
