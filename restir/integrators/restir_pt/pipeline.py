@@ -80,7 +80,8 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 # sampled by one ray a frame, was the largest error the denoiser left on the glossy Cornell box,
 # and path reuse cannot lower it. With four rays the defaults went from 1.09x and 1.25x above the
 # path tracer at equal time after the denoiser there to 1.21x and 1.16x below it, with the other
-# scenes unchanged (no emitter in view) and the frame 3-4% dearer (BENCHMARKS.md, "The emission
+# scenes unchanged (no emitter in view); the frame 2-4% dearer at 128 lines, about a quarter of a
+# path-tracer frame more at 512 (the primary-hit stage 60 -> 200-230 ms; BENCHMARKS.md, "The emission
 # seen directly from more camera rays").
 @dataclasses.dataclass
 class PTSettings(PathReuseSettings):

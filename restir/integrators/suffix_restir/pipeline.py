@@ -59,8 +59,8 @@ SPATIAL_RADIUS_1080 = 30.0
 # And emission.rays 8: a frame costs 6-9 path-tracer samples but traced one camera ray for the
 # emission seen directly; with eight, the glossy Cornell box's denoised error at equal time went
 # from 1.72x and 1.96x the path tracer's to 1.16x and 1.13x (two seeds; four rays: 1.31x, 1.32x),
-# the frame's time unchanged within the measurement's noise at 512 lines (BENCHMARKS.md, "The
-# emission seen directly from more camera rays").
+# the frame at 512 lines about 5% dearer (the primary-hit stage 62-71 -> 467 ms of 8.4-8.6 s;
+# BENCHMARKS.md, "The emission seen directly from more camera rays").
 @dataclasses.dataclass
 class SuffixSettings(PathReuseSettings):
     emission_rays: int = setting("emission.rays", 8, EMISSION_RAYS_DOC)
