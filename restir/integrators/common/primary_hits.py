@@ -13,6 +13,8 @@ estimate of the pixel's, so the mean is; it spends n - 1 rays on the one term th
 cannot improve: the edge of an emitter seen directly, sampled by one ray a pixel, is the largest
 error a denoiser leaves on a lit Cornell box (BENCHMARKS.md, "The glossy box after the denoiser").
 """
+import functools
+
 import warp as wp
 
 from ...device.camera import Camera, camera_u, generate_ray, lattice_u
@@ -82,14 +84,12 @@ def make_primary_hits_kernel(fixed_lattice: bool = False):
 
 
 primary_hits_kernel = make_primary_hits_kernel()
-_fixed_lattice_kernel: list = []
 
 
+@functools.cache
 def fixed_lattice_kernel():
     """The mutation's kernel, built on first use."""
-    if not _fixed_lattice_kernel:
-        _fixed_lattice_kernel.append(make_primary_hits_kernel(fixed_lattice=True))
-    return _fixed_lattice_kernel[0]
+    return make_primary_hits_kernel(fixed_lattice=True)
 
 
 def emission_rays(integrator) -> int:
