@@ -1,10 +1,15 @@
-"""The frame's cost of `emission.rays`: a method's frame with 1, 4 and 8 camera rays a sample for
-the emission seen directly, and the path tracer's 1-spp frame, in alternating rounds of one run
-(ratios taken within a round: these machines are noisy).
+"""The frame's cost of `emission.rays`: a method's frame with one camera ray a sample for the
+emission seen directly, with n at every pixel, and with n only near the emitters' edges
+(`emission.adaptive`, the default), and the path tracer's 1-spp frame, in alternating rounds of
+one run (ratios taken within a round: these machines are noisy). Whole frames vary by up to 25%
+between rounds here, so the primary-hit stage's own time and rays are printed too: they are the
+robust figures.
 
-    taskset -c 0 .venv/bin/python benchmarks/bench_emission_rays.py --size 512 --method restir-pt --scene cornell-box
+    RESTIR_CPU_THREADS=1 taskset -c 0 .venv/bin/python benchmarks/bench_emission_rays.py --size 512 \\
+        --method restir-pt --rays 4 --frames 8 --json benchmarks/results/restir_pt/emission_adaptive_512.json
 """
 import argparse
+import json
 import os
 import sys
 
@@ -21,22 +26,41 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--size", type=int, default=512)
     ap.add_argument("--method", default="restir-pt")
+    ap.add_argument("--rays", type=int, default=4, help="n, the emission.rays compared with one")
     ap.add_argument("--scene", default="cornell-box", help="a shared scene's folder or builtin:NAME")
-    ap.add_argument("--frames", type=int, default=4)
-    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--frames", type=int, default=8, help="frames a render (the first traces n rays everywhere)")
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--json")
     args = ap.parse_args()
     scene = load(args.scene)
-    configs = [("pt", "pt", {})] + [(f"rays {n}", args.method, {"emission.rays": str(n)}) for n in (1, 4, 8)]
-    ms = {label: [] for label, _, _ in configs}
+    n = str(args.rays)
+    configs = [("pt", "pt", {}), ("rays 1", args.method, {"emission.rays": "1"}),
+               (f"rays {n} everywhere", args.method, {"emission.rays": n, "emission.adaptive": "false"}),
+               (f"rays {n} adaptive", args.method, {"emission.rays": n, "emission.adaptive": "true"})]
+    rows = {label: {"ms_per_frame": [], "gbuffer_ms_per_frame": [], "gbuffer_rays_per_pixel": []}
+            for label, _, _ in configs}
+    px = args.size * args.size * args.frames
     for rnd in range(args.rounds):
         for label, method, settings in configs:
             r = restir.render(scene, RenderConfig(method=method, width=args.size, height=args.size, spp=1,
                                                   frames=args.frames, seed=rnd, settings=settings))
-            ms[label].append(r.stats["ms_per_frame"])
-    ms = {k: np.array(v) for k, v in ms.items()}
-    for label in ms:
-        print(f"{label:8s} ms/frame {np.round(ms[label], 1).tolist()}  / pt {np.round(ms[label] / ms['pt'], 2).tolist()}"
-              f"  / rays 1 {np.round(ms[label] / ms['rays 1'], 3).tolist()}")
+            row = rows[label]
+            row["ms_per_frame"].append(r.stats["ms_per_frame"])
+            if method != "pt":
+                row["gbuffer_ms_per_frame"].append(r.stats["stages"]["gbuffer"]["total_ms"] / args.frames)
+                row["gbuffer_rays_per_pixel"].append(r.stats["rays_by_stage"]["gbuffer"] / px)
+    pt = np.array(rows["pt"]["ms_per_frame"])
+    for label, row in rows.items():
+        ms = np.array(row["ms_per_frame"])
+        row["over_pt"] = (ms / pt).tolist()
+        line = f"{label:18s} ms/frame {np.round(ms, 0).tolist()}  / pt {np.round(ms / pt, 2).tolist()}"
+        if row["gbuffer_ms_per_frame"]:
+            line += (f"  primary hits {np.round(row['gbuffer_ms_per_frame'], 0).tolist()} ms,"
+                     f" {np.round(row['gbuffer_rays_per_pixel'], 3).tolist()} rays a pixel")
+        print(line, flush=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"args": vars(args), "rows": rows}, f, indent=1)
 
 
 if __name__ == "__main__":

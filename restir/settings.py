@@ -10,7 +10,7 @@ are built: a change compiles other code) or runtime (a value the kernels read).
 A method names its class (`Integrator.Settings`); the integrator reads `self.settings.candidates`.
 Every settings object also holds the render's own settings (seed, spp, max_depth, camera motion,
 the scene's Russian-roulette depth and hide_emitters), filled by the API from the RenderConfig
-and the scene, never by `--set`; and one `--set` setting every method has, `emission.rays`. A
+and the scene, never by `--set`; and the `--set` settings every method has, `emission.rays` and `emission.adaptive`. A
 component's settings nest under a prefix (`di.*`: `component(...)`), so `--set di.candidates=8`
 reaches `settings.di.candidates`.
 """
@@ -22,6 +22,9 @@ from .config import ConfigError, parse_value
 MAX_EMISSION_RAYS = 64  # emission.rays: camera rays per sample for the emission seen directly
 EMISSION_RAYS_DOC = ("camera rays per pixel sample that estimate the emission seen directly (the sample's own "
                      "and n - 1 more spread over the pixel); the rest of the path starts at the sample's own hit")
+EMISSION_ADAPTIVE_DOC = ("with emission.rays > 1: trace the extra rays only at pixels where the previous launch saw "
+                         "the emission vary in the 3x3 neighbourhood (an emitter's edge), one ray elsewhere "
+                         "(unbiased: decided from earlier, independent samples)")
 MUTATION_DOC = "fault injection for the mutation tests (biased; the harness refuses it)"  # debug.mutation
 
 
@@ -106,6 +109,7 @@ class Settings(SettingsGroup):
     hide_emitters: bool = False
     # a --set setting every method has: where the primary rays are traced (common/primary_hits.py)
     emission_rays: int = setting("emission.rays", 1, EMISSION_RAYS_DOC)
+    emission_adaptive: bool = setting("emission.adaptive", True, EMISSION_ADAPTIVE_DOC)
 
     # ------------------------------------------------------------------ building and reading
     @classmethod

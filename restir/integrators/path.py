@@ -38,6 +38,7 @@ from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import EventCounts, output_events, packed_events, ray_events
+from .common.emission_edges import VARIED, edge_arrays, emission_edges, emission_sum, rays_at, seen
 from .common.primary_hits import emission_rays, emission_seen, lattice_emission
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
@@ -57,6 +58,7 @@ class PTParams:
     hide_emitters: int
     nee_samples: int   # light samples per vertex, N
     emission_rays: int  # camera rays per sample for the emission seen directly (common/primary_hits.py)
+    emission_adaptive: int  # those rays only where the previous launch saw the emission vary (emission_edges.py)
 
 
 @wp.struct
@@ -157,8 +159,10 @@ def make_path_trace_kernel(several_light_samples: bool):
         scene: SceneDevice,
         camera: Camera,
         params: PTParams,
+        edges_previous: wp.array(dtype=float),
         frame_mean: wp.array(dtype=wp.vec3),
         frame_m2: wp.array(dtype=wp.vec3),
+        edges_current: wp.array(dtype=float),
         events: wp.array(dtype=EventCounts),
     ):
         pixel = wp.tid() + offset
@@ -169,6 +173,8 @@ def make_path_trace_kernel(several_light_samples: bool):
             acc.m2 = frame_m2[pixel]
             acc.n = params.sample_begin
         rays = int(0)
+        n = rays_at(edges_previous, camera, pixel, params.emission_rays, params.emission_adaptive)
+        record = float(VARIED)  # what this launch's rays saw of the emission (emission_edges.py)
         for s in range(params.sample_begin, params.sample_end):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
             u = camera_u(params.seed, params.frame, pixel, s)
@@ -177,10 +183,16 @@ def make_path_trace_kernel(several_light_samples: bool):
             rays += res.rays
             L = res.L * ray.weight
             if params.emission_rays > 1 and params.hide_emitters == 0:
-                Le = lattice_emission(scene, camera, pixel, u, params.emission_rays)
-                L += (res.Le0 * ray.weight + Le) / float(params.emission_rays)
-                rays += params.emission_rays - 1
+                first = emission_sum(res.Le0)
+                if s > params.sample_begin:
+                    first = seen(record, res.Le0)
+                extra = lattice_emission(scene, camera, pixel, u, n, first)
+                record = extra.record
+                L += (res.Le0 * ray.weight + extra.Le) / float(n)
+                rays += n - 1
             acc = welford_add(acc, L)
+        if params.emission_rays > 1 and params.emission_adaptive != 0 and params.hide_emitters == 0:
+            edges_current[pixel] = record
         frame_mean[pixel] = acc.mean
         frame_m2[pixel] = acc.m2
         if params.sample_end == params.spp:  # a non-finite mean is counted once, when the frame is done
@@ -239,6 +251,7 @@ class PathTracer(Integrator):
         p.hide_emitters = int(bool(s.hide_emitters))
         p.nee_samples = int(s.nee_samples)
         p.emission_rays = emission_rays(self)
+        p.emission_adaptive = int(emission_edges(self) is not None)
         return p
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch
@@ -253,8 +266,12 @@ class PathTracer(Integrator):
         kernel = path_trace_kernel if self.settings.nee_samples == 1 else path_trace_kernel_light_samples
         p = self.params(frame)
         p.sample_begin, p.sample_end = begin, end
-        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p], [self.frame_mean, self.frame_m2],
-                       nonfinite="nonfinite_outputs", new_call=begin == 0)
+        edges = emission_edges(self)
+        previous, current = edge_arrays(self, edges)
+        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p, previous],
+                       [self.frame_mean, self.frame_m2, current], nonfinite="nonfinite_outputs", new_call=begin == 0)
+        if edges is not None:
+            edges.swap()
 
     def frame_moments(self):
         shape = (self.height, self.width, 3)

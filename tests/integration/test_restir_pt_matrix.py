@@ -31,6 +31,9 @@ OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0, "spatial.reciprocal": F
 # 4 (2026-12-07): the cells recorded before then keep it; C4-defaults, -orbit, -dolly and -centre
 # take the defaults as they are.
 ONE_RAY = {"emission.rays": 1}
+# The extra camera rays at every pixel, as until emission.adaptive became the default (2026-12-07,
+# later that day): the cells that tested emission.rays before keep it.
+EVERY_PIXEL = {"emission.adaptive": False}
 
 MATRIX = {
     "C1-candidates-1": ({**OFFICIAL, **NO_REUSE}, "none"),
@@ -57,8 +60,9 @@ MATRIX = {
     "C4-expected": ({"shade.expected": True, **ONE_RAY}, "none"),
     "C4-expected-nee-orbit": ({"shade.expected": True, "direct": "nee", **ONE_RAY}, "orbit"),
     "C2-expected-nee": ({"shade.expected": True, "direct": "nee", **TEMPORAL, **ONE_RAY}, "none"),
-    # emission.rays 4 (the default) with both options above, orbiting
-    "C4-emission-rays-orbit": ({"emission.rays": 4, "shade.expected": True, "direct": "nee"}, "orbit"),
+    # emission.rays 4 (the default) at every pixel, with both options above, orbiting
+    "C4-emission-rays-orbit": ({"emission.rays": 4, "shade.expected": True, "direct": "nee", **EVERY_PIXEL},
+                               "orbit"),
     "C4-k8-rounds-2": ({**OFFICIAL, "spatial.neighbors": 8, "spatial.rounds": 2}, "none"),
     # reciprocal neighbours (spatial.reciprocal, the default): the pass on its own, several rounds
     "C3-reciprocal-k3": ({**OFFICIAL, **SPATIAL, "spatial.reciprocal": True}, "none"),

@@ -99,25 +99,34 @@ def _z_against_quadrature(scene, r) -> tuple:
     return (float(r.image.mean()) - float(expected.mean())) / se, se
 
 
-@pytest.mark.parametrize("method,spp,frames", [("pt", 16384, 1), ("restir-pt", 512, 8)])
-def test_emission_rays_estimate_the_emission_seen_directly(method, spp, frames):
+@pytest.mark.parametrize("method,spp,frames,adaptive", [("pt", 16384, 1, False), ("restir-pt", 512, 8, False),
+                                                        ("pt", 2048, 8, True), ("restir-pt", 512, 8, True)])
+def test_emission_rays_estimate_the_emission_seen_directly(method, spp, frames, adaptive):
     """emission.rays = 4: the emission seen directly is the mean over the sample's camera ray and
     three more on a lattice shifted by its position, through the path tracer's kernel and the
-    primary-hit stage of the other methods. The image at max_depth 1 (emission alone) must match
-    the quadrature: |z| < 4 on the image mean (false failure about 6e-5; the standard error,
+    primary-hit stage of the other methods; at every pixel, or (emission.adaptive) only where the
+    previous launch saw the emission vary nearby. The image at max_depth 1 (emission alone) must
+    match the quadrature: |z| < 4 on the image mean (false failure about 6e-5; the standard error,
     from the samples' variance, is below 0.3% of the mean, so a bias of 1.2% is found). And the
     emitter's edge, one ray a sample before, must be less noisy per sample."""
     scene = restir.load_scene("builtin:cornell-box", width=16, height=16)
     runs = {n: restir.render(scene, RenderConfig(method=method, spp=spp, frames=frames, max_depth=1, seed=11,
-                                                 settings={"emission.rays": str(n)})) for n in (1, 4)}
+                                                 settings={"emission.rays": str(n),
+                                                           "emission.adaptive": str(adaptive).lower()}))
+            for n in (1, 4)}
     r = runs[4]
     z, se = _z_against_quadrature(scene, r)
     assert abs(z) < 4.0, z
     assert se < 0.003 * float(r.image.mean())
     assert float(r.sample_var.sum()) < 0.5 * float(runs[1].sample_var.sum())
-    # four rays a sample, where one was traced
     stage = "path_trace" if method == "pt" else "gbuffer"
-    assert r.stats["rays_by_stage"][stage] == 4 * runs[1].stats["rays_by_stage"][stage] == 4 * 256 * spp * frames
+    rays, one = r.stats["rays_by_stage"][stage], runs[1].stats["rays_by_stage"][stage]
+    assert one == 256 * spp * frames
+    if not adaptive:  # four rays a sample, where one was traced
+        assert rays == 4 * one
+    else:  # four at the light's edge (and everywhere in the first launch), one elsewhere
+        first_launch = 4 * 256 * (spp if method == "pt" else 1)
+        assert one < rays - first_launch < 0.5 * 4 * one, rays / one
 
 
 def test_emission_rays_is_refused_out_of_range():
@@ -129,13 +138,19 @@ def test_emission_rays_is_refused_out_of_range():
             restir.render(scene, RenderConfig(method="restir-pt", settings={"emission.rays": bad}))
 
 
-def test_the_fixed_lattice_mutation_is_caught():
-    """The mutation `emission_lattice_fixed` (TESTING.md 5.11): the extra rays at the lattice's
-    points not shifted by the sample's position, so each always samples the same spot of the
-    pixel. The test above must fail it (measured: z = -244)."""
+@pytest.mark.parametrize("mutation,settings", [
+    ("emission_lattice_fixed", {"emission.adaptive": "false"}),
+    ("emission_rays_by_own_ray", {})])
+def test_the_emission_rays_mutations_are_caught(mutation, settings):
+    """The mutations of emission.rays (TESTING.md 5.11), which the test above must fail:
+    emission_lattice_fixed, the extra rays at the lattice's points not shifted by the sample's
+    position, so each always samples the same spot of the pixel (measured: z = -244); and
+    emission_rays_by_own_ray, the four rays traced where the sample's own ray saw the light rather
+    than where the previous launch saw the emission vary: a choice made from the estimate it
+    scales, biased low at the light's edge (measured: z = -193)."""
     scene = restir.load_scene("builtin:cornell-box", width=16, height=16)
     r = restir.render(scene, RenderConfig(method="restir-pt", spp=512, frames=8, max_depth=1, seed=11,
-                                          settings={"emission.rays": "4", "debug.mutation": "emission_lattice_fixed"}))
+                                          settings={"emission.rays": "4", "debug.mutation": mutation, **settings}))
     z, _ = _z_against_quadrature(scene, r)
     assert abs(z) > 20.0, z
 
@@ -154,3 +169,22 @@ def _render_centred(method, n):
     scene = restir.load_scene("builtin:cornell-box", width=8, height=8)
     return restir.render(scene, RenderConfig(method=method, spp=2, frames=1, max_depth=1, seed=4, jitter=False,
                                              settings={"emission.rays": str(n)}))
+
+
+def test_adaptive_emission_rays_keep_the_image_with_fewer_rays():
+    """emission.adaptive (the default) traces the extra rays only where the previous launch saw
+    the emission vary in a pixel's 3x3 neighbourhood. On the glossy box, still and orbiting, that
+    neighbourhood holds every pixel the light's edge crosses, and elsewhere all rays see the same
+    emission: the images are those of the rays at every pixel, bit for bit (measured; an edge
+    that moved more than a pixel between launches would change them, without bias), at less than
+    half the camera rays after the first launch (which traces them everywhere)."""
+    scene = restir.load_scene("builtin:cornell-box-glossy", width=24, height=20)
+    for motion in ("none", "orbit"):
+        runs = {a: restir.render(scene, RenderConfig(method="restir-pt", spp=2, frames=3, seed=5, camera_motion=motion,
+                                                     camera_speed=2.0, settings={"emission.adaptive": a}))
+                for a in ("true", "false")}
+        np.testing.assert_array_equal(runs["true"].image, runs["false"].image)
+        rays = {a: r.stats["rays_by_stage"]["gbuffer"] for a, r in runs.items()}
+        first_launch = 4 * 24 * 20
+        assert rays["false"] == 4 * 24 * 20 * 6
+        assert rays["true"] - first_launch < 0.5 * (rays["false"] - first_launch), rays

@@ -12,6 +12,9 @@ The rest of every path still starts at the sample's own hit. Each ray's emission
 estimate of the pixel's, so the mean is; it spends n - 1 rays on the one term that path reuse
 cannot improve: the edge of an emitter seen directly, sampled by one ray a pixel, is the largest
 error a denoiser leaves on a lit Cornell box (BENCHMARKS.md, "The glossy box after the denoiser").
+With `emission.adaptive` (the default) the n rays are traced only at pixels where the previous
+launch saw the emission vary nearby, one elsewhere (common/emission_edges.py: why that stays
+unbiased); the stage then also reads and writes those records.
 """
 import functools
 
@@ -22,6 +25,7 @@ from ...device.intersect import T_MAX, SurfaceHit, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.scene_device import SceneDevice
 from ...device.types import ENV_NONE
+from .emission_edges import edge_arrays, emission_edges, emission_rays, emission_sum, rays_at, seen
 from .events import EventCounts, packed_events, ray_events
 from .gbuffer import GBuffer, set_camera_origin
 
@@ -38,27 +42,46 @@ def emission_seen(scene: SceneDevice, hit: SurfaceHit, d: wp.vec3) -> wp.vec3:
     return Le
 
 
+@wp.struct
+class LatticeEmission:
+    Le: wp.vec3     # rays 1..n-1: the sum of their emission seen directly times their filter weights
+    record: float   # what every ray of the pixel saw, for the next launch (emission_edges.seen)
+
+
 @wp.func
-def lattice_emission(scene: SceneDevice, camera: Camera, pixel: int, u: wp.vec2, n: int) -> wp.vec3:
-    """Rays 1..n-1 of `emission.rays` (ray 0 is the sample's own, at u): the sum of their
-    emission seen directly times their filter weights."""
-    Le = wp.vec3(0.0)
+def lattice_emission(scene: SceneDevice, camera: Camera, pixel: int, u: wp.vec2, n: int,
+                     first: float) -> LatticeEmission:
+    """Rays 1..n-1 of `emission.rays` (ray 0 is the sample's own, at u, whose record is `first`)."""
+    out = LatticeEmission()
+    out.Le = wp.vec3(0.0)
+    out.record = first
     for j in range(1, n):
         ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, lattice_u(u, j, n))
-        Le += emission_seen(scene, trace_closest(scene, ray.o, ray.d, T_MAX), ray.d) * ray.weight
-    return Le
+        Le = emission_seen(scene, trace_closest(scene, ray.o, ray.d, T_MAX), ray.d)
+        out.Le += Le * ray.weight
+        out.record = seen(out.record, Le)
+    return out
 
 
-def make_primary_hits_kernel(fixed_lattice: bool = False):
-    """The stage's kernel. fixed_lattice builds the mutation `emission_lattice_fixed` (ReSTIR PT's
-    debug.mutation): rays 1..n-1 of emission.rays at the lattice's points unshifted by the
-    sample's position, so they always sample the same spots of the pixel (biased at an emitter's
-    edge); the shipped kernel is built without it."""
+MUTATIONS = ("emission_lattice_fixed", "emission_rays_by_own_ray")
 
-    @wp.kernel(module="primary_hits_fixed_lattice" if fixed_lattice else None)
+
+def make_primary_hits_kernel(mutation: str = "none"):
+    """The stage's kernel, or a build with one of ReSTIR PT's debug.mutation faults, its own
+    module (the shipped kernel is built with none):
+    - emission_lattice_fixed: rays 1..n-1 at the lattice's points unshifted by the sample's
+      position, so they always sample the same spots of the pixel (biased at an emitter's edge);
+    - emission_rays_by_own_ray: with emission.adaptive, the n rays traced where the sample's own
+      ray saw emission rather than where the previous launch saw it vary (a choice that depends on
+      the estimate it scales: biased low at an emitter's edge)."""
+    fixed_lattice = mutation == "emission_lattice_fixed"
+    by_own_ray = mutation == "emission_rays_by_own_ray"
+
+    @wp.kernel(module=None if mutation == "none" else f"primary_hits_{mutation}")
     def primary_hits_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32, frame: wp.uint32,
-                            sample: int, hide_emitters: int, emission_rays: int, gb: GBuffer,
-                            weight: wp.array(dtype=float), emission: wp.array(dtype=wp.vec3),
+                            sample: int, hide_emitters: int, emission_rays: int, adaptive: int,
+                            edges_previous: wp.array(dtype=float), gb: GBuffer, weight: wp.array(dtype=float),
+                            emission: wp.array(dtype=wp.vec3), edges_current: wp.array(dtype=float),
                             events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         u = camera_u(seed, frame, pixel, sample)
@@ -70,13 +93,22 @@ def make_primary_hits_kernel(fixed_lattice: bool = False):
         Le = wp.vec3(0.0)
         rays = int(1)
         if hide_emitters == 0:
-            Le = emission_seen(scene, hit, ray.d) * ray.weight
-            if emission_rays > 1:
+            Le0 = emission_seen(scene, hit, ray.d)
+            Le = Le0 * ray.weight
+            n = rays_at(edges_previous, camera, pixel, emission_rays, adaptive)
+            if wp.static(by_own_ray):
+                n = wp.where(emission_sum(Le0) > 0.0, emission_rays, 1)
+            record = emission_sum(Le0)
+            if n > 1:
                 shift = u
                 if wp.static(fixed_lattice):
                     shift = wp.vec2(0.0)
-                Le = (Le + lattice_emission(scene, camera, pixel, shift, emission_rays)) / float(emission_rays)
-                rays = emission_rays
+                extra = lattice_emission(scene, camera, pixel, shift, n, record)
+                Le = (Le + extra.Le) / float(n)
+                record = extra.record
+                rays = n
+            if emission_rays > 1 and adaptive != 0:
+                edges_current[pixel] = record
         emission[pixel] = Le
         events[pixel] = packed_events(ray_events(rays))
 
@@ -87,23 +119,22 @@ primary_hits_kernel = make_primary_hits_kernel()
 
 
 @functools.cache
-def fixed_lattice_kernel():
-    """The mutation's kernel, built on first use."""
-    return make_primary_hits_kernel(fixed_lattice=True)
-
-
-def emission_rays(integrator) -> int:
-    """The camera rays a sample traces for the emission seen directly: the `emission.rays`
-    setting, or 1 with pixel-centre rays (RenderConfig.jitter off), where every ray would be the
-    sample's own."""
-    return int(integrator.settings.emission_rays) if integrator.dscene.jitter else 1
+def mutant_kernel(mutation: str):
+    """A mutation's build of the stage's kernel, made on first use."""
+    return make_primary_hits_kernel(mutation)
 
 
 def trace_primary_hits(integrator, camera, seed, frame, sample: int, hide_emitters: int, gb: GBuffer, weight,
                        emission, kernel=None) -> None:
     """The stage for one sample, timed as "gbuffer": gb takes the camera's position (the rays its
-    readers rebuild start there), then the launch writes the hits (kernel: a mutation's build)."""
+    readers rebuild start there), then the launch writes the hits (kernel: a mutation's build),
+    and the records of where the emission varied (emission.adaptive) swap for the next launch."""
     set_camera_origin(gb, camera)
+    edges = emission_edges(integrator)
+    previous, current = edge_arrays(integrator, edges)
     integrator.run_stage("gbuffer", kernel or primary_hits_kernel,
                          [integrator.dscene.scene, camera, seed, frame, sample, hide_emitters,
-                          emission_rays(integrator)], [gb, weight, emission])
+                          emission_rays(integrator), int(edges is not None), previous],
+                         [gb, weight, emission, current])
+    if edges is not None:
+        edges.swap()

@@ -9,7 +9,7 @@ import warp as wp
 from ...device.streams import PT_MAX_CANDIDATES, PT_MAX_NEIGHBORS
 from ...settings import Settings, setting
 from ..base import Integrator
-from ..common.primary_hits import fixed_lattice_kernel, trace_primary_hits
+from ..common.primary_hits import MUTATIONS as PRIMARY_HIT_MUTATIONS, mutant_kernel, trace_primary_hits
 from ..common.events import PassCounts
 from ..common.gbuffer import PingPong, allocate_gbuffer
 from .direct_light import attach_direct_light, check_di_settings
@@ -164,7 +164,8 @@ class PathReuseIntegrator(Integrator):
         self.current_camera = camera
         if self.di is not None:
             self.di.current_camera = camera
-        mutant = fixed_lattice_kernel() if self.settings.debug_mutation == "emission_lattice_fixed" else None
+        mutation = self.settings.debug_mutation
+        mutant = mutant_kernel(mutation) if mutation in PRIMARY_HIT_MUTATIONS else None
         trace_primary_hits(self, camera, wp.uint32(self.settings.seed & 0xFFFFFFFF), wp.uint32(frame), sample,
                            int(bool(self.settings.hide_emitters)), self.gbuffers.current, self.primary_weight,
                            self.emission, mutant)

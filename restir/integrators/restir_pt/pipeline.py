@@ -59,6 +59,9 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
     # emission.rays: the extra camera rays at the lattice's points unshifted by the sample's
     # position (common/primary_hits.py builds that stage's kernel with the defect)
     "emission_lattice_fixed": None,
+    # emission.adaptive: the n rays where the sample's own ray saw emission, not where the previous
+    # launch saw it vary (the same module builds it)
+    "emission_rays_by_own_ray": None,
     # shade.expected: the reciprocal spatial pass's expected output not divided by V + 1
     "expected_unnormalized": lambda: (
         trace_temporal_kernel, mcmc_kernel, spatial_kernel,
