@@ -21,6 +21,7 @@ from ..film import SampleFilm, film_add_kernel
 from ..parallel import launch_pixels
 from ..settings import Settings
 from ..timing import BufferRegistry, StageTimer
+from .common.emission_edges import small_emitters_kernel
 from .common.events import COUNTER_NAMES, EV_RAYS, EV_SATURATED, EventCounts
 from .common.mutations import Mutations
 from .common.tally import TALLY_KERNELS, EventTally
@@ -81,7 +82,7 @@ class Integrator:
             timer.daemon = True
             timer.start()
         try:
-            for k in (*self.kernels(), *TALLY_KERNELS.values(), film_add_kernel):
+            for k in (*self.kernels(), *TALLY_KERNELS.values(), film_add_kernel, small_emitters_kernel):
                 wp.load_module(k.module, device=self.device)
         finally:
             if timer is not None:

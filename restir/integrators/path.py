@@ -38,7 +38,7 @@ from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import EventCounts, output_events, packed_events, ray_events
-from .common.emission_edges import VARIED, edge_arrays, emission_edges, emission_sum, rays_at, seen
+from .common.emission_edges import VARIED, edge_arrays, edge_choice, edge_record, emission_edges, emission_sum, seen
 from .common.primary_hits import emission_rays, emission_seen, lattice_emission
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
@@ -159,10 +159,11 @@ def make_path_trace_kernel(several_light_samples: bool):
         scene: SceneDevice,
         camera: Camera,
         params: PTParams,
-        edges_previous: wp.array(dtype=float),
+        edges_previous: wp.array(dtype=wp.vec2),
+        edge_marks: wp.array(dtype=wp.uint8),
         frame_mean: wp.array(dtype=wp.vec3),
         frame_m2: wp.array(dtype=wp.vec3),
-        edges_current: wp.array(dtype=float),
+        edges_current: wp.array(dtype=wp.vec2),
         events: wp.array(dtype=EventCounts),
     ):
         pixel = wp.tid() + offset
@@ -173,7 +174,8 @@ def make_path_trace_kernel(several_light_samples: bool):
             acc.m2 = frame_m2[pixel]
             acc.n = params.sample_begin
         rays = int(0)
-        n = rays_at(edges_previous, camera, pixel, params.emission_rays, params.emission_adaptive)
+        choice = edge_choice(edges_previous, edge_marks, camera, pixel, params.emission_rays, params.emission_adaptive)
+        n = choice.rays
         record = float(VARIED)  # what this launch's rays saw of the emission (emission_edges.py)
         for s in range(params.sample_begin, params.sample_end):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
@@ -192,7 +194,7 @@ def make_path_trace_kernel(several_light_samples: bool):
                 rays += n - 1
             acc = welford_add(acc, L)
         if params.emission_rays > 1 and params.emission_adaptive != 0 and params.hide_emitters == 0:
-            edges_current[pixel] = record
+            edges_current[pixel] = edge_record(choice, record)
         frame_mean[pixel] = acc.mean
         frame_m2[pixel] = acc.m2
         if params.sample_end == params.spp:  # a non-finite mean is counted once, when the frame is done
@@ -267,9 +269,10 @@ class PathTracer(Integrator):
         p = self.params(frame)
         p.sample_begin, p.sample_end = begin, end
         edges = emission_edges(self)
-        previous, current = edge_arrays(self, edges)
-        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p, previous],
-                       [self.frame_mean, self.frame_m2, current], nonfinite="nonfinite_outputs", new_call=begin == 0)
+        with self.timer.stage("path_trace", begin == 0):  # the small emitters' marks
+            previous, marks, current = edge_arrays(self, edges, camera)
+        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p, previous, marks],
+                       [self.frame_mean, self.frame_m2, current], nonfinite="nonfinite_outputs", new_call=False)
         if edges is not None:
             edges.swap()
 

@@ -12,6 +12,7 @@ import warp as wp
 KERNEL_MODULES = [
     "restir.integrators.path",
     "restir.integrators.common.primary_hits",
+    "restir.integrators.common.emission_edges",
     "restir.integrators.restir_di.s3_temporal",
     "restir.integrators.restir_di.s4_spatial",
     "restir.integrators.restir_di.s5_shade",

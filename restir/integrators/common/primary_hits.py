@@ -25,7 +25,7 @@ from ...device.intersect import T_MAX, SurfaceHit, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.scene_device import SceneDevice
 from ...device.types import ENV_NONE
-from .emission_edges import edge_arrays, emission_edges, emission_rays, emission_sum, rays_at, seen
+from .emission_edges import edge_arrays, edge_choice, edge_record, emission_edges, emission_rays, emission_sum, seen
 from .events import EventCounts, packed_events, ray_events
 from .gbuffer import GBuffer, set_camera_origin
 
@@ -80,8 +80,9 @@ def make_primary_hits_kernel(mutation: str = "none"):
     @wp.kernel(module=None if mutation == "none" else f"primary_hits_{mutation}")
     def primary_hits_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32, frame: wp.uint32,
                             sample: int, hide_emitters: int, emission_rays: int, adaptive: int,
-                            edges_previous: wp.array(dtype=float), gb: GBuffer, weight: wp.array(dtype=float),
-                            emission: wp.array(dtype=wp.vec3), edges_current: wp.array(dtype=float),
+                            edges_previous: wp.array(dtype=wp.vec2), edge_marks: wp.array(dtype=wp.uint8),
+                            gb: GBuffer, weight: wp.array(dtype=float),
+                            emission: wp.array(dtype=wp.vec3), edges_current: wp.array(dtype=wp.vec2),
                             events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         u = camera_u(seed, frame, pixel, sample)
@@ -95,7 +96,8 @@ def make_primary_hits_kernel(mutation: str = "none"):
         if hide_emitters == 0:
             Le0 = emission_seen(scene, hit, ray.d)
             Le = Le0 * ray.weight
-            n = rays_at(edges_previous, camera, pixel, emission_rays, adaptive)
+            choice = edge_choice(edges_previous, edge_marks, camera, pixel, emission_rays, adaptive)
+            n = choice.rays
             if wp.static(by_own_ray):
                 n = wp.where(emission_sum(Le0) > 0.0, emission_rays, 1)
             record = emission_sum(Le0)
@@ -108,7 +110,7 @@ def make_primary_hits_kernel(mutation: str = "none"):
                 record = extra.record
                 rays = n
             if emission_rays > 1 and adaptive != 0:
-                edges_current[pixel] = record
+                edges_current[pixel] = edge_record(choice, record)
         emission[pixel] = Le
         events[pixel] = packed_events(ray_events(rays))
 
@@ -131,10 +133,11 @@ def trace_primary_hits(integrator, camera, seed, frame, sample: int, hide_emitte
     and the records of where the emission varied (emission.adaptive) swap for the next launch."""
     set_camera_origin(gb, camera)
     edges = emission_edges(integrator)
-    previous, current = edge_arrays(integrator, edges)
+    with integrator.timer.stage(integrator.stage_prefix + "gbuffer"):  # the small emitters' marks
+        previous, marks, current = edge_arrays(integrator, edges, camera)
     integrator.run_stage("gbuffer", kernel or primary_hits_kernel,
                          [integrator.dscene.scene, camera, seed, frame, sample, hide_emitters,
-                          emission_rays(integrator), int(edges is not None), previous],
-                         [gb, weight, emission, current])
+                          emission_rays(integrator), int(edges is not None), previous, marks],
+                         [gb, weight, emission, current], new_call=False)
     if edges is not None:
         edges.swap()
