@@ -7,6 +7,11 @@ robust figures.
 
     RESTIR_CPU_THREADS=1 taskset -c 0 .venv/bin/python benchmarks/bench_emission_rays.py --size 512 \\
         --method restir-pt --rays 4 --frames 8 --json benchmarks/results/restir_pt/emission_adaptive_512.json
+
+With --variance: instead, the variance of the emission seen directly (max_depth 1) over independent
+runs, per pixel, with the rays adaptive and at every pixel (what the adaptive choice gives up):
+
+    .venv/bin/python benchmarks/bench_emission_rays.py --variance --scene veach-mis --size 32 --frames 32 --runs 24
 """
 import argparse
 import json
@@ -22,6 +27,28 @@ from benchmarks.bench_error_structure import load  # noqa: E402
 from restir.config import RenderConfig  # noqa: E402
 
 
+def variance(args, scene):
+    """Per-pixel variance of the max_depth-1 image over independent runs, adaptive against every
+    pixel (the same seeds), and the pixels where the adaptive choice loses most."""
+    images = {}
+    for adaptive in ("false", "true"):
+        images[adaptive] = np.array([
+            restir.render(scene, RenderConfig(method=args.method, width=args.size, height=args.size, spp=1,
+                                              frames=args.frames, max_depth=1, seed=seed,
+                                              settings={"emission.rays": str(args.rays),
+                                                        "emission.adaptive": adaptive})).image.sum(axis=2)
+            for seed in range(args.runs)])
+    every, adaptive = images["false"].var(axis=0), images["true"].var(axis=0)
+    print(f"summed per-pixel variance over {args.runs} runs: every pixel {every.sum():.6g}, adaptive "
+          f"{adaptive.sum():.6g} (ratio {adaptive.sum() / max(every.sum(), 1e-30):.3f})")
+    worst = np.argsort(-(adaptive - every).ravel())[:5]
+    for i in worst:
+        y, x = divmod(int(i), args.size)
+        print(f"  pixel ({y}, {x}): mean {images['false'][:, y, x].mean():.4g}, variance every pixel "
+              f"{every[y, x]:.4g}, adaptive {adaptive[y, x]:.4g}")
+    return {"every_pixel": float(every.sum()), "adaptive": float(adaptive.sum())}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--size", type=int, default=512)
@@ -31,8 +58,16 @@ def main():
     ap.add_argument("--frames", type=int, default=8, help="frames a render (the first traces n rays everywhere)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--json")
+    ap.add_argument("--variance", action="store_true", help="the variance check instead of the timing")
+    ap.add_argument("--runs", type=int, default=24, help="--variance: independent runs")
     args = ap.parse_args()
     scene = load(args.scene)
+    if args.variance:
+        out = variance(args, scene)
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump({"args": vars(args), "variance": out}, f, indent=1)
+        return
     n = str(args.rays)
     configs = [("pt", "pt", {}), ("rays 1", args.method, {"emission.rays": "1"}),
                (f"rays {n} everywhere", args.method, {"emission.rays": n, "emission.adaptive": "false"}),

@@ -22,9 +22,10 @@ from .config import ConfigError, parse_value
 MAX_EMISSION_RAYS = 64  # emission.rays: camera rays per sample for the emission seen directly
 EMISSION_RAYS_DOC = ("camera rays per pixel sample that estimate the emission seen directly (the sample's own "
                      "and n - 1 more spread over the pixel); the rest of the path starts at the sample's own hit")
-EMISSION_ADAPTIVE_DOC = ("with emission.rays > 1: trace the extra rays only at pixels where the previous launch saw "
-                         "the emission vary in the 3x3 neighbourhood (an emitter's edge), one ray elsewhere "
-                         "(unbiased: decided from earlier, independent samples)")
+EMISSION_ADAPTIVE_DOC = ("with emission.rays > 1: trace the extra rays only at pixels where one of the last 16 "
+                         "launches saw the emission vary in the 3x3 neighbourhood (an emitter's edge) or near an "
+                         "emitter at most 2 px wide on screen, one ray elsewhere (unbiased: decided from earlier, "
+                         "independent samples and the geometry)")
 MUTATION_DOC = "fault injection for the mutation tests (biased; the harness refuses it)"  # debug.mutation
 
 
