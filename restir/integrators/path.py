@@ -38,7 +38,7 @@ from ..film import Welford, welford_add
 from ..settings import Settings, setting
 from .base import Integrator
 from .common.events import EventCounts, output_events, packed_events, ray_events
-from .common.emission_edges import VARIED, edge_arrays, edge_choice, edge_record, emission_edges, emission_sum, seen
+from .common.emission_edges import VARIED, edge_choice, edge_launch, edge_record, emission_sum, seen
 from .common.primary_hits import emission_rays, emission_seen, lattice_emission
 
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
@@ -58,7 +58,7 @@ class PTParams:
     hide_emitters: int
     nee_samples: int   # light samples per vertex, N
     emission_rays: int  # camera rays per sample for the emission seen directly (common/primary_hits.py)
-    emission_adaptive: int  # those rays only where the previous launch saw the emission vary (emission_edges.py)
+    emission_adaptive: int  # those rays only near emitters' edges and small emitters (emission_edges.py)
 
 
 @wp.struct
@@ -174,7 +174,8 @@ def make_path_trace_kernel(several_light_samples: bool):
             acc.m2 = frame_m2[pixel]
             acc.n = params.sample_begin
         rays = int(0)
-        choice = edge_choice(edges_previous, edge_marks, camera, pixel, params.emission_rays, params.emission_adaptive)
+        choice = edge_choice(edges_previous, edge_marks, camera, pixel, params.emission_rays,
+                             params.emission_adaptive)
         n = choice.rays
         record = float(VARIED)  # what this launch's rays saw of the emission (emission_edges.py)
         for s in range(params.sample_begin, params.sample_end):
@@ -253,7 +254,7 @@ class PathTracer(Integrator):
         p.hide_emitters = int(bool(s.hide_emitters))
         p.nee_samples = int(s.nee_samples)
         p.emission_rays = emission_rays(self)
-        p.emission_adaptive = int(emission_edges(self) is not None)
+        p.emission_adaptive = 0  # set per launch (render_samples)
         return p
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch
@@ -268,13 +269,11 @@ class PathTracer(Integrator):
         kernel = path_trace_kernel if self.settings.nee_samples == 1 else path_trace_kernel_light_samples
         p = self.params(frame)
         p.sample_begin, p.sample_end = begin, end
-        edges = emission_edges(self)
-        with self.timer.stage("path_trace", begin == 0):  # the small emitters' marks
-            previous, marks, current = edge_arrays(self, edges, camera)
-        self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p, previous, marks],
-                       [self.frame_mean, self.frame_m2, current], nonfinite="nonfinite_outputs", new_call=False)
-        if edges is not None:
-            edges.swap()
+        with edge_launch(self, "path_trace", camera, begin == 0) as e:
+            p.emission_adaptive = e.adaptive
+            self.run_stage("path_trace", kernel, [self.dscene.scene, camera, p, e.previous, e.marks],
+                           [self.frame_mean, self.frame_m2, e.current], nonfinite="nonfinite_outputs",
+                           new_call=e.new_call)
 
     def frame_moments(self):
         shape = (self.height, self.width, 3)

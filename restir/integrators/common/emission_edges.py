@@ -30,6 +30,9 @@ alone, the pixels near any emissive triangle whose projection spans at most SMAL
 pixels (`small_emitters_kernel`): they take the n rays whatever earlier launches saw. The marks
 depend on the scene and the camera only, so they are as unbiased a choice as the records.
 """
+import contextlib
+from typing import NamedTuple
+
 import warp as wp
 
 from ...device.camera import Camera, project_to_pixel
@@ -181,18 +184,34 @@ def emission_edges(integrator) -> EmissionEdges | None:
     return edges
 
 
-_NONE = {}
+class EdgeLaunch(NamedTuple):
+    """What one launch of a stage passes its kernel: adaptive (0 or 1), the records it reads and
+    writes, the marks, and new_call for the stage's timer (False once the marks were timed)."""
+    adaptive: int
+    previous: wp.array
+    marks: wp.array
+    current: wp.array
+    new_call: bool
 
 
-def edge_arrays(integrator, edges: EmissionEdges | None, camera) -> tuple:
-    """(previous, marks, current) for the launch with `camera`, the marks made for it: the records,
-    or empty arrays the kernels never touch (they read them only when n > 1 and adaptive)."""
-    if edges is not None:
+_EMPTY = {}
+
+
+@contextlib.contextmanager
+def edge_launch(integrator, stage: str, camera, new_call: bool = True):
+    """One launch of `stage` with `camera`: with emission.adaptive on, its marks made (timed as part
+    of the stage) before, the records swapped after; otherwise empty arrays the kernels never touch
+    (they read them only when n > 1 and adaptive) and nothing else done."""
+    edges = emission_edges(integrator)
+    if edges is None:
+        device = str(integrator.device)
+        if device not in _EMPTY:
+            _EMPTY[device] = (wp.empty(0, dtype=wp.vec2, device=integrator.device),
+                              wp.empty(0, dtype=wp.uint8, device=integrator.device))
+        records, marks = _EMPTY[device]
+        yield EdgeLaunch(0, records, marks, records, new_call)
+        return
+    with integrator.timer.stage(integrator.stage_prefix + stage, new_call):
         edges.mark(integrator, camera)
-        return edges.previous, edges.marks, edges.current
-    device = str(integrator.device)
-    if device not in _NONE:
-        _NONE[device] = (wp.empty(0, dtype=wp.vec2, device=integrator.device),
-                         wp.empty(0, dtype=wp.uint8, device=integrator.device))
-    records, marks = _NONE[device]
-    return records, marks, records
+    yield EdgeLaunch(1, edges.previous, edges.marks, edges.current, False)
+    edges.swap()

@@ -12,9 +12,9 @@ The rest of every path still starts at the sample's own hit. Each ray's emission
 estimate of the pixel's, so the mean is; it spends n - 1 rays on the one term that path reuse
 cannot improve: the edge of an emitter seen directly, sampled by one ray a pixel, is the largest
 error a denoiser leaves on a lit Cornell box (BENCHMARKS.md, "The glossy box after the denoiser").
-With `emission.adaptive` (the default) the n rays are traced only at pixels where the previous
-launch saw the emission vary nearby, one elsewhere (common/emission_edges.py: why that stays
-unbiased); the stage then also reads and writes those records.
+With `emission.adaptive` (the default) the n rays are traced only at pixels where recent launches
+saw the emission vary nearby or a small emitter lies near, one elsewhere (common/emission_edges.py:
+why that stays unbiased); the stage then also reads and writes those records.
 """
 import functools
 
@@ -25,7 +25,7 @@ from ...device.intersect import T_MAX, SurfaceHit, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.scene_device import SceneDevice
 from ...device.types import ENV_NONE
-from .emission_edges import edge_arrays, edge_choice, edge_record, emission_edges, emission_rays, emission_sum, seen
+from .emission_edges import edge_choice, edge_launch, edge_record, emission_rays, emission_sum, seen
 from .events import EventCounts, packed_events, ray_events
 from .gbuffer import GBuffer, set_camera_origin
 
@@ -130,14 +130,10 @@ def trace_primary_hits(integrator, camera, seed, frame, sample: int, hide_emitte
                        emission, kernel=None) -> None:
     """The stage for one sample, timed as "gbuffer": gb takes the camera's position (the rays its
     readers rebuild start there), then the launch writes the hits (kernel: a mutation's build),
-    and the records of where the emission varied (emission.adaptive) swap for the next launch."""
+    and with emission.adaptive the records of where the emission varied (edge_launch)."""
     set_camera_origin(gb, camera)
-    edges = emission_edges(integrator)
-    with integrator.timer.stage(integrator.stage_prefix + "gbuffer"):  # the small emitters' marks
-        previous, marks, current = edge_arrays(integrator, edges, camera)
-    integrator.run_stage("gbuffer", kernel or primary_hits_kernel,
-                         [integrator.dscene.scene, camera, seed, frame, sample, hide_emitters,
-                          emission_rays(integrator), int(edges is not None), previous, marks],
-                         [gb, weight, emission, current], new_call=False)
-    if edges is not None:
-        edges.swap()
+    with edge_launch(integrator, "gbuffer", camera) as e:
+        integrator.run_stage("gbuffer", kernel or primary_hits_kernel,
+                             [integrator.dscene.scene, camera, seed, frame, sample, hide_emitters,
+                              emission_rays(integrator), e.adaptive, e.previous, e.marks],
+                             [gb, weight, emission, e.current], new_call=e.new_call)

@@ -21,7 +21,8 @@ from ..restir_di.pipeline import DISettings, ReSTIRDI
 def di_component():
     """The `di.*` settings field of a path-reuse method's settings: ReSTIR DI's, with the lighter
     defaults above (8 candidates, 1 spatial round), without its fault injection."""
-    return component("di.", _path_method_di_defaults, "ReSTIR DI's ", exclude=("debug.mutation", "emission.rays", "emission.adaptive"))
+    return component("di.", _path_method_di_defaults, "ReSTIR DI's ",
+                     exclude=("debug.mutation", "emission.rays", "emission.adaptive"))
 
 
 def _path_method_di_defaults() -> DISettings:
