@@ -6,6 +6,7 @@
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase quality  # equal-time relMSE vs pt and restir-pt
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase search   # the three search structures' costs
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase samples  # equal-sample relMSE: where the error is
+    .venv/bin/python benchmarks/bench_suffix_restir.py --phase projection --frames 24  # the GPU case, from rays
 
 stages: Suffix ReSTIR with its defaults for `--frames` frames after a warm-up frame, alternating
 with the path tracer at 1 spp (A B A B), both twice; per-stage ms per frame grouped as the
@@ -33,12 +34,23 @@ tracer, ReSTIR PT and Suffix ReSTIR in four configurations; relMSE per frame ove
 against the path tracer at 1024 spp, the share of it in the 10 worst pixels of each frame, and the
 relMSE without them (is the error in a few fireflies or everywhere?).
 
+projection: what a frame would buy if its cost were proportional to its rays (the assumption of
+a GPU projection: a projection, not a measurement of a GPU). Per scene of `--projection-scenes`
+at `--lines` lines: each method's rays per pixel per frame after its first frame (counted by the
+renderer, frames 2-9), the path tracer's spp of the same rays (the integers on both sides of the
+ratio), then `restir compare` at equal samples (`--frames` frames, the last `--frames` -
+`--warmup` measured; OIDN per frame) with the path tracer at 1 spp and at those spp: each
+method's denoised per-frame error against the path tracer's at the spp its rays would buy,
+interpolated log-log between those integers (above 1: the method is lower). The CPU's
+equal-time comparison is bench_error_structure.py's.
+
 quality: 16 warm-up frames then 16 measured, relMSE per frame (frames 16..31) and accumulated,
 against the path tracer at `--ref-spp`; the path tracer and ReSTIR PT get Suffix ReSTIR's measured
 frame time (the path tracer by spp fitted as a + b spp; ReSTIR PT by spp as well).
 """
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -348,9 +360,70 @@ def phase_samples(args, out):
     out["samples"] = rows
 
 
+def rays_per_frame(scene, method, width, height, max_depth, seed=1):
+    """Rays per pixel per frame after the first frame (which traces the emission rays at every
+    pixel and starts without history): frames 2-9 of one render."""
+    def count(frames):
+        return restir.render(scene, restir.RenderConfig(method=method, spp=1, frames=frames, seed=seed, width=width,
+                                                        height=height, max_depth=max_depth)).stats["rays"]
+    return (count(9) - count(1)) / (8 * width * height)
+
+
+def phase_projection(args, out):
+    from benchmarks.bench_error_structure import SCENES, load
+    from restir.compare import compare
+
+    rows = []
+    for name, spec, aspect, _, depth in SCENES:
+        if name not in args.projection_scenes:
+            continue
+        scene = load(spec)
+        h = args.lines
+        w = int(round(h * aspect / 2)) * 2
+        rays = {m: rays_per_frame(scene, m, w, h, depth) for m in ("pt", "restir-pt", "suffix-restir")}
+        ratio = {m: rays[m] / rays["pt"] for m in ("restir-pt", "suffix-restir")}
+        # the path tracer at the spp on both sides of each ratio; its error between them interpolated
+        # log-log (the error of n independent samples falls as a power of n)
+        spp = {m: sorted({max(1, math.floor(v)), max(1, math.ceil(v))}) for m, v in ratio.items()}
+        pts = sorted({k for v in spp.values() for k in v} | {1})
+        methods = [f"pt:spp={k}" if k > 1 else "pt" for k in pts] + ["restir-pt", "suffix-restir"]
+        r = compare(scene, methods, frames=args.frames, warmup=args.warmup, width=w, height=h, max_depth=depth,
+                    reference_spp=args.ref_spp, denoise=True, correlation_runs=0, seed=args.seed)
+        by = {m.label: m.metrics for m in r.methods}
+
+        def pt_at(k, key):
+            return by["pt" if k == 1 else f"pt:spp={k}"][key]
+
+        def pt_between(m, key):
+            lo, hi = spp[m][0], spp[m][-1]
+            if lo == hi:
+                return pt_at(lo, key)
+            t = (math.log(ratio[m]) - math.log(lo)) / (math.log(hi) - math.log(lo))
+            return math.exp((1 - t) * math.log(pt_at(lo, key)) + t * math.log(pt_at(hi, key)))
+
+        print(f"\n## {name} ({w}x{h}), rays per pixel per frame: " + ", ".join(f"{m} {v:.2f}" for m, v in rays.items()))
+        print("| scene | method | rays / pt's | raw | denoised | " + " | ".join(f"pt {k} spp, denoised" for k in pts)
+              + " | pt at the ratio (log-log) | pt / method | F(8) |")
+        for m in ("restir-pt", "suffix-restir"):
+            x = by[m]
+            base = pt_between(m, "relmse_denoised_frame")
+            row = {"scene": name, "method": m, "rays": rays[m], "pt_rays": rays["pt"], "ratio": ratio[m],
+                   "ms_per_frame": x["ms_per_frame"], "relmse_frame": x["relmse_frame"],
+                   "denoised": x["relmse_denoised_frame"],
+                   "pt_denoised": {k: pt_at(k, "relmse_denoised_frame") for k in pts},
+                   "pt_raw": {k: pt_at(k, "relmse_frame") for k in pts},
+                   "pt_denoised_at_ratio": base, "f8": x["correlation_factor"]["8"]}
+            rows.append(row)
+            print(f"| {name} | {m} | {ratio[m]:.2f} | {x['relmse_frame']:.3g} | {x['relmse_denoised_frame']:.3g} | "
+                  + " | ".join(f"{pt_at(k, 'relmse_denoised_frame'):.3g}" for k in pts)
+                  + f" | {base:.3g} | {base / x['relmse_denoised_frame']:.2f} | {x['correlation_factor']['8']:.2f} |",
+                  flush=True)
+    out["projection"] = rows
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "search", "samples", "all"], default="all")
+    ap.add_argument("--phase", choices=["stages", "scaling", "grid", "quality", "search", "samples", "projection", "all"], default="all")
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--stage-size", type=int, default=800)
@@ -359,10 +432,14 @@ def main():
     ap.add_argument("--out-dir", default="out/bench_suffix")
     ap.add_argument("--samples-size", type=int, default=96)
     ap.add_argument("--search-sizes", type=int, nargs="+", default=[256, 512, 800])
+    ap.add_argument("--projection-scenes", nargs="+", default=["indirect-room", "cornell-box-glossy", "veach-ajar"])
+    ap.add_argument("--lines", type=int, default=128, help="projection: image height")
+    ap.add_argument("--warmup", type=int, default=8, help="projection: frames before the error is measured")
+    ap.add_argument("--seed", type=int, default=1, help="projection: the methods' seed")
     ap.add_argument("--json")
     args = ap.parse_args()
     out = {}
-    for phase in ("stages", "scaling", "grid", "quality", "search", "samples"):
+    for phase in ("stages", "scaling", "grid", "quality", "search", "samples", "projection"):
         if args.phase in (phase, "all"):
             globals()[f"phase_{phase}"](args, out)
     if args.json:
