@@ -6,18 +6,16 @@
 Per scene: the path tracer, ReSTIR PT and Suffix ReSTIR at the scene's depth, and (on the two
 scenes with direct light worth resampling) the path tracer and ReSTIR DI at max_depth 2, ReSTIR
 DI's only depth. Each comparison also renders the path tracer at every other method's frame
-time (the fair per-frame baseline; its spp fitted as a + b spp) and 8 independent runs per
-method for the radial correlation. Scenes are rendered at `--lines` lines at their own aspect.
-The reference is the path tracer at `--ref-spp` (cached); its own relMSE is printed, since every
-denoised error includes it. Below each scene's table, each method against the path tracer at its frame time without the
-spp rounded (`pt_between`; give `pt:spp=k` methods that bracket the frame times).
-`--frames F` compares at equal samples instead (F frames of 1 spp per
-method, `--warmup` of them before the per-frame error is measured); `--runs 0` skips the
-radial correlation (F(8) and the temporal correlation come from the measured frames anyway).
+time (the fair per-frame baseline; its spp fitted as a + b spp, its error interpolated between
+the whole spp on both sides) and 8 independent runs per method for the radial correlation.
+Scenes are rendered at `--lines` lines at their own aspect. The reference is the path tracer at
+`--ref-spp` (cached); its own relMSE is printed, since every denoised error includes it.
+`--frames F` compares at equal samples instead (F frames of 1 spp per method, `--warmup` of them
+before the per-frame error is measured); `--runs 0` skips the radial correlation (F(8) and the
+temporal correlation come from the measured frames anyway).
 """
 import argparse
 import json
-import math
 import os
 import sys
 
@@ -47,41 +45,6 @@ def load(spec):
         return restir.load_scene(spec)
     root = os.environ.get("RESTIR_SCENES") or os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes")
     return restir.load_scene(os.path.normpath(os.path.join(root, spec, "scene.xml")))
-
-
-def pt_between(rows):
-    """Each non-pt row's denoised error against the path tracer's at the row's frame time, with the
-    spp not rounded: the frame time as spp from a line fitted through the pt rows' own frame times
-    (least squares over every `pt` / `pt:spp=k` row of the scene, as rendered at equal time), the
-    path tracer's denoised error at that spp interpolated log-log between the pt rows on both sides
-    (extrapolated from the nearest two outside them). compare's own baseline rounds the spp, and
-    between 1 and 2 spp the rounding moves a factor by up to 1.4x. {method: (spp, pt error there,
-    factor)}; empty with fewer than two pt rows."""
-    pts = {1 if r["method"] == "pt" else int(r["method"].split("spp=")[1]): r for r in rows
-           if r["method"] == "pt" or r["method"].startswith("pt:spp=")}
-    ks = sorted(pts)
-    if len(ks) < 2:
-        return {}
-    mx = sum(ks) / len(ks)
-    my = sum(pts[k]["ms_per_frame"] for k in ks) / len(ks)
-    b = sum((k - mx) * (pts[k]["ms_per_frame"] - my) for k in ks) / sum((k - mx) ** 2 for k in ks)
-    a = my - b * mx
-
-    def error_at(spp):
-        i = max(0, min(len(ks) - 2, max([j for j, k in enumerate(ks) if k <= spp] or [0])))
-        lo, hi = ks[i], ks[i + 1]
-        t = (math.log(spp) - math.log(lo)) / (math.log(hi) - math.log(lo))
-        return math.exp((1 - t) * math.log(pts[lo]["relmse_denoised_frame"])
-                        + t * math.log(pts[hi]["relmse_denoised_frame"]))
-
-    out = {}
-    for r in rows:
-        if r["method"] == "pt" or r["method"].startswith("pt:"):
-            continue
-        spp = max(1.0, (r["ms_per_frame"] - a) / b)
-        e = error_at(spp)
-        out[r["method"]] = (spp, e, e / r["relmse_denoised_frame"])
-    return out
 
 
 def main():
@@ -129,7 +92,8 @@ def main():
                    "frames": m.frames, "relmse_frame": x["relmse_frame"],
                    "relmse_denoised_frame": x["relmse_denoised_frame"], "relmse_accumulated": x["relmse_accumulated"],
                    "factor_raw": hd.get("raw_frame"), "factor_denoised": hd.get("denoised_frame"),
-                   "baseline": hd.get("baseline"), "correlation_factor_8": x["correlation_factor"]["8"],
+                   "baseline": hd.get("baseline"), "baseline_spp": hd.get("baseline_spp"),
+                   "correlation_factor_8": x["correlation_factor"]["8"],
                    "radial": {r_: radial[r_] for r_ in (1, 4, 8, 16)}, "temporal": x["temporal_correlation"],
                    "reference_relmse": r.reference.own_relmse()}
             rows.append(row)
@@ -139,14 +103,6 @@ def main():
                   + " | ".join("n/a" if radial[r_] is None else f"{radial[r_]:.3f}" for r_ in (1, 4, 8, 16))
                   + " | " + ("n/a" if x["temporal_correlation"] is None else f"{x['temporal_correlation']:.3f}")
                   + f" | {x['relmse_accumulated']:.3g} |", flush=True)  # n/a: fewer than two measured frames
-        scene_rows = [row for row in rows if row["scene"] == name]
-        between = pt_between(scene_rows)
-        for row in scene_rows:
-            if row["method"] in between:
-                spp, e, f = between[row["method"]]
-                row["pt_interpolated"] = {"spp": spp, "relmse_denoised_frame": e, "factor_denoised": f}
-                print(f"  {row['method']}: its frame = the path tracer's at {spp:.2f} spp; its denoised error is "
-                      f"{factor_text(f)} than the path tracer's there ({e:.3g}, interpolated)")
         os.makedirs(os.path.dirname(args.out) or ".", exist_ok=True)
         with open(args.out, "w") as f:
             json.dump({"args": vars(args), "rows": rows}, f, indent=2)

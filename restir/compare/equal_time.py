@@ -4,10 +4,17 @@ A ReSTIR frame costs several path-tracer frames at 1 spp; per frame, the path tr
 time gets the samples per pixel that fit in the other method's frame. A frame's time is not
 proportional to its samples: camera set-up, launches and the film cost the same at any spp, and
 at small sizes that is a large part of a 1-spp frame. So the time is fitted as a + b * spp from
-two probes (1 spp and an spp near the longest target), and spp = round((t - a) / b); spp = t /
-t_1spp would give the path tracer too few samples whenever a > 0.
+two probes (1 spp and an spp near the longest target), and a frame of t ms is worth (t - a) / b
+samples; t / t_1spp would give the path tracer too few whenever a > 0.
+
+That worth is rarely whole: a ReSTIR frame of 1.46 path-tracer samples is neither the path tracer
+at 1 spp nor at 2, and between the two the path tracer's error changes by about 1.4x. So the
+path tracer is rendered at the whole spp on both sides (`bracket`) and the headline interpolates
+its error between them (headline.py); rounding instead moved close comparisons by up to that
+factor (BENCHMARKS.md, "Equal time with the path tracer's spp not rounded").
 """
 import dataclasses
+import math
 import statistics
 import time
 
@@ -22,8 +29,14 @@ class FrameTimeFit:
     per_spp_ms: float
     probes: list
 
-    def spp_for(self, ms: float) -> int:
-        return max(1, round((ms - self.fixed_ms) / self.per_spp_ms))
+    def spp_at(self, ms: float) -> float:
+        """The samples per pixel a frame of `ms` is worth (at least 1)."""
+        return max(1.0, (ms - self.fixed_ms) / self.per_spp_ms)
+
+    def bracket(self, ms: float) -> tuple:
+        """The whole spp on both sides of `spp_at(ms)` (one when it is whole)."""
+        s = self.spp_at(ms)
+        return tuple(sorted({math.floor(s), math.ceil(s)}))
 
     def to_dict(self) -> dict:
         return {"fixed_ms": self.fixed_ms, "per_spp_ms": self.per_spp_ms,

@@ -86,7 +86,7 @@ class MethodResult:
     denoised: np.ndarray | None = None  # the last frame through Open Image Denoise (compare(denoise=True))
     interrupted: bool = False           # Ctrl-C stopped it before its budget was spent
     radial: dict | None = None          # radial correlation: radii, values, standard errors, runs, frame
-    frame_time_of: list = dataclasses.field(default_factory=list)  # the path tracer at these methods' frame time
+    frame_time_of: list = dataclasses.field(default_factory=list)  # the path tracer on either side of these methods' frame time
     denoise_subset: list | None = None  # the frames the denoised metrics are over (indices)
     frame_subset: list | None = dataclasses.field(default=None, repr=False)  # those frames (not in the JSON)
 
@@ -105,7 +105,7 @@ class Comparison:
     methods: list
     notes: list = dataclasses.field(default_factory=list)
     interrupted: bool = False  # Ctrl-C: the methods up to the interrupted one, the rest not run
-    frame_time_fit: dict | None = None  # the path tracer's ms per frame as a + b spp (equal_time.py)
+    frame_time_fit: dict | None = None  # the path tracer's ms per frame as a + b spp, each method's spp (equal_time.py)
     headline: list = dataclasses.field(default_factory=list)  # headline.py: factors against the path tracer
 
     def to_dict(self) -> dict:
@@ -316,8 +316,9 @@ def compare(scene, methods, config: CompareConfig | None = None, *, progress=Non
 
 
 def _match_frame_time(scene, specs, base, reference, budget, warmup, progress, comparison) -> bool:
-    """The path tracer at each non-pt method's frame time (same budget), appended to the
-    comparison's methods; a user's `pt` entry at the fitted spp is used as it is."""
+    """The path tracer at the whole spp on both sides of each non-pt method's frame time (same
+    budget), appended to the comparison's methods; a user's `pt` entry at such an spp is used as
+    it is. Each method's frame in path-tracer spp goes to `frame_time_fit["spp_of"]`."""
     from .equal_time import fit_frame_time
 
     others = [m for m in comparison.methods if m.method != "pt"]
@@ -334,9 +335,11 @@ def _match_frame_time(scene, specs, base, reference, budget, warmup, progress, c
                                 "tracer at the methods' frame time")
         return False
     comparison.frame_time_fit = fit.to_dict()
-    wanted = {}
+    comparison.frame_time_fit["spp_of"] = {m.label: fit.spp_at(m.metrics["ms_per_frame"]) for m in others}
+    wanted = {}  # the path tracer at the whole spp on both sides of each method's frame
     for m in others:
-        wanted.setdefault(fit.spp_for(m.metrics["ms_per_frame"]), []).append(m.label)
+        for spp in fit.bracket(m.metrics["ms_per_frame"]):
+            wanted.setdefault(spp, []).append(m.label)
     new = []
     for spp, labels in sorted(wanted.items()):
         same = [r for r in comparison.methods if r.method == "pt" and r.spp == spp and r.settings == settings]
@@ -353,7 +356,9 @@ def _match_frame_time(scene, specs, base, reference, budget, warmup, progress, c
     comparison.notes.append(
         "the path tracer at each method's frame time: ms per frame = {:.2f} + {:.3f} spp (probes {}); ".format(
             fit.fixed_ms, fit.per_spp_ms, ", ".join(f"{s} spp {t:.1f} ms" for s, t in fit.probes))
-        + "; ".join(f"{', '.join(labels)}: {spp} spp" for spp, labels in sorted(wanted.items())))
+        + "; ".join(f"{label}: {spp:.2f} spp" for label, spp in comparison.frame_time_fit["spp_of"].items())
+        + " (the path tracer rendered at " + ", ".join(str(spp) for spp in sorted(wanted))
+        + " spp, its errors interpolated between them)")
     return complete
 
 

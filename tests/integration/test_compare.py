@@ -2,6 +2,7 @@
 the reference cache, input errors before any work, and the HTML report operated in a real browser
 (Debian's chromium through Selenium; `make test` installs both)."""
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -13,6 +14,7 @@ import pytest
 import restir
 from restir.compare import MethodSpec, compare
 from restir.compare.frames import _Blocks
+from restir.compare.headline import at_spp
 from restir.config import ConfigError
 from restir.image_io import read_exr
 
@@ -97,8 +99,9 @@ def test_reference_is_cached(comparison, monkeypatch):
 
 
 def test_equal_time_budget(tmp_path, monkeypatch):
-    """Every method's frames until the budget is spent; the path tracer also at restir-di's frame
-    time (its spp from the fit of the comparison's own probes), the baseline of the headline."""
+    """Every method's frames until the budget is spent; the path tracer also at the whole spp on
+    both sides of restir-di's frame time (its worth in spp from the fit of the comparison's own
+    probes), interpolated between them as the baseline of the headline."""
     monkeypatch.setenv("RESTIR_CACHE", str(tmp_path))
     scene = restir.load_scene("builtin:cornell-box")
     r = compare(scene, ["pt", "restir-di"], reference_spp=16, equal_time=0.5, width=16, height=16,
@@ -109,13 +112,20 @@ def test_equal_time_budget(tmp_path, monkeypatch):
     fit = r.frame_time_fit
     assert fit and fit["per_spp_ms"] > 0 and fit["probes"][0]["spp"] == 1
     di = r.methods[1]
-    spp = max(1, round((di.metrics["ms_per_frame"] - fit["fixed_ms"]) / fit["per_spp_ms"]))
-    matched = [m for m in r.methods if m.method == "pt" and "restir-di" in m.frame_time_of]
-    assert len(matched) == 1 and matched[0].spp == spp
-    assert (matched[0] is r.methods[0]) == (spp == 1) and len(r.methods) == (2 if spp == 1 else 3)
+    spp = max(1.0, (di.metrics["ms_per_frame"] - fit["fixed_ms"]) / fit["per_spp_ms"])
+    assert fit["spp_of"]["restir-di"] == pytest.approx(spp)
+    matched = sorted((m for m in r.methods if m.method == "pt" and "restir-di" in m.frame_time_of),
+                     key=lambda m: m.spp)
+    assert [m.spp for m in matched] == sorted({math.floor(spp), math.ceil(spp)})
+    assert (matched[0] is r.methods[0]) == (matched[0].spp == 1)  # the given pt at 1 spp is used as it is
+    assert len(r.methods) == 2 + sum(m.spp != 1 for m in matched)
     (h,) = r.headline
-    assert h["method"] == "restir-di" and h["baseline"] == matched[0].label and h["basis"] == "equal frame time"
-    assert h["raw_frame"] == pytest.approx(matched[0].metrics["relmse_frame"] / di.metrics["relmse_frame"])
+    assert h["method"] == "restir-di" and h["basis"] == "equal frame time" and h["baseline_spp"] == pytest.approx(spp)
+    assert h["baseline"] in [m.label for m in matched]
+    expected = at_spp(matched[0], matched[-1], spp, "relmse_frame")
+    assert h["raw_frame"] == pytest.approx(expected / di.metrics["relmse_frame"])
+    lo, hi = (m.metrics["relmse_frame"] for m in (matched[0], matched[-1]))
+    assert min(lo, hi) <= expected <= max(lo, hi)
     assert h["denoised_frame"] is None and "per-frame relMSE raw" in h["text"]
     assert any("each method's frame time" in n for n in r.notes)
 

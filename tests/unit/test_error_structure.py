@@ -6,6 +6,8 @@ Tolerances are 5 standard errors of the estimate (computed from the case's own s
 distribution), so each check has a false-failure probability below 1e-6 for any seed; the seeds
 are fixed so the suite is deterministic. The smallest deviation each catches is stated beside it.
 """
+import math
+
 import numpy as np
 import pytest
 
@@ -170,7 +172,7 @@ def test_frame_subset_is_evenly_spaced_and_bounded():
 
 def test_frame_time_fit_accounts_for_the_fixed_cost(monkeypatch):
     """A path tracer whose frame costs 12 ms + 3 ms per spp: the fit recovers both, and a 60-ms
-    frame gets 16 spp (t / t_1spp would give 4)."""
+    frame is worth 16 spp (t / t_1spp would give 4)."""
     probes = []
 
     def fake_ms(scene, config):
@@ -183,7 +185,9 @@ def test_frame_time_fit_accounts_for_the_fixed_cost(monkeypatch):
     fit = equal_time.fit_frame_time(None, RenderConfig(), longest_ms=60.0)
     assert probes == [1, 4]  # 1 spp, then near the longest frame's time in 1-spp frames
     assert (fit.fixed_ms, fit.per_spp_ms) == pytest.approx((12.0, 3.0))
-    assert fit.spp_for(60.0) == 16 and fit.spp_for(15.0) == 1 and fit.spp_for(1.0) == 1
+    assert fit.spp_at(60.0) == pytest.approx(16.0) and fit.spp_at(15.0) == 1.0 and fit.spp_at(1.0) == 1.0
+    # the whole spp on both sides of a frame's worth: 16.5 ms is 1.5 samples
+    assert fit.bracket(16.5) == (1, 2) and fit.bracket(60.0) == (16,) and fit.bracket(1.0) == (1,)
     assert fit.to_dict()["probes"] == [{"spp": 1, "ms": 15.0}, {"spp": 4, "ms": 24.0}]
 
 
@@ -197,3 +201,34 @@ def test_reference_own_relmse():
     # the variance estimate from 16 blocks has relative SE sqrt(2 / 15) per pixel, over 12288 values
     assert ref.own_relmse() == pytest.approx(0.0025 / 1.01, rel=0.05)
     assert Reference(np.ones((4, 4, 3)), "exact").own_relmse() is None
+
+
+def test_headline_interpolates_the_path_tracer_between_whole_spp():
+    """At equal time a frame worth 1.5 path-tracer samples is compared with the path tracer's
+    errors at 1 and 2 spp interpolated log-log (errors 0.04 at 1 spp and 0.02 at 2 give
+    0.04 * 0.5 ** log2(1.5) at 1.5); a frame worth a whole spp is compared with that one alone."""
+    from types import SimpleNamespace
+
+    from restir.compare.headline import headline
+
+    def result(label, method, spp, ms, raw, den, acc, of=()):
+        metrics = {"ms_per_frame": ms, "relmse_frame": raw, "relmse_denoised_frame": den, "relmse_accumulated": acc}
+        return SimpleNamespace(label=label, method=method, spp=spp, metrics=metrics, frame_time_of=list(of))
+
+    pt1 = result("pt", "pt", 1, 30.0, 4.0, 0.04, 1.0, of=["restir-pt"])
+    pt2 = result("pt:spp=2", "pt", 2, 60.0, 2.0, 0.02, 0.9, of=["restir-pt"])
+    pt3 = result("pt:spp=3", "pt", 3, 90.0, 1.3, 0.015, 0.8, of=["restir-di"])
+    rpt = result("restir-pt", "restir-pt", 1, 45.0, 1.0, 0.025, 0.5)
+    rdi = result("restir-di", "restir-di", 1, 90.0, 1.0, 0.01, 0.4)
+    comparison = SimpleNamespace(methods=[pt1, rpt, rdi, pt2, pt3], budget="time: 1 s",
+                                 frame_time_fit={"spp_of": {"restir-pt": 1.5, "restir-di": 3.0}})
+    h_pt, h_di = headline(comparison)
+    t = math.log(1.5) / math.log(2.0)
+    assert h_pt["baseline_spp"] == 1.5 and h_pt["basis"] == "equal frame time"
+    assert h_pt["raw_frame"] == pytest.approx(4.0 * 0.5 ** t / 1.0)
+    assert h_pt["denoised_frame"] == pytest.approx(0.04 * 0.5 ** t / 0.025)
+    assert h_pt["accumulated"] == pytest.approx(math.exp((1 - t) * math.log(1.0) + t * math.log(0.9)) / 0.5)
+    assert h_pt["ms_per_frame"] == [45.0, pytest.approx(45.0)]
+    assert "against the path tracer at 1.50 spp, pt and pt:spp=2 interpolated (equal frame time" in h_pt["text"]
+    assert h_di["baseline"] == "pt:spp=3" and h_di["denoised_frame"] == pytest.approx(1.5)
+    assert h_di["text"].startswith("restir-di against pt:spp=3 (equal frame time")
