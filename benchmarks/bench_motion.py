@@ -19,11 +19,11 @@ history every frame, which is where spatial reuse is expected to matter. This sc
 """
 import argparse
 import json
-import math
 import os
 import statistics
 import sys
 import time
+from types import SimpleNamespace
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
@@ -32,6 +32,8 @@ import numpy as np  # noqa: E402
 import restir  # noqa: E402
 from restir.api import make_integrator, sized_scene  # noqa: E402
 from restir.compare.denoise import Denoiser, require_oidn  # noqa: E402
+from restir.compare.equal_time import FrameTimeFit  # noqa: E402
+from restir.compare.headline import at_spp  # noqa: E402
 from restir.compare.metrics import relmse  # noqa: E402
 from restir.config import RenderConfig  # noqa: E402
 
@@ -98,23 +100,23 @@ def run(scene, args, method, spp, settings, refs, dens):
 
 
 def at_equal_time(rows):
-    """Each non-pt row's path tracer at its frame time: spp on the least-squares line through the
-    pt rows' frame times, the pt rows' denoised error interpolated log-log (extrapolated from the
-    nearest two outside them)."""
+    """Each non-pt row against the path tracer at its frame time, as `restir compare` reads it
+    (equal_time.FrameTimeFit, headline.at_spp), the line through the pt rows' own frame times
+    (least squares) and the pt rows on both sides of the frame's worth (the nearest two outside
+    them: extrapolated)."""
     pts = {1 if k == "pt" else int(k.split("spp=")[1]): r for k, r in rows.items() if k.startswith("pt")}
     ks = sorted(pts)
     mx = sum(ks) / len(ks)
     my = sum(pts[k]["ms_per_frame"] for k in ks) / len(ks)
     b = sum((k - mx) * (pts[k]["ms_per_frame"] - my) for k in ks) / sum((k - mx) ** 2 for k in ks)
-    a = my - b * mx
+    fit = FrameTimeFit(my - b * mx, b, [(k, pts[k]["ms_per_frame"]) for k in ks])
+    results = {k: SimpleNamespace(spp=k, metrics={"relmse_denoised_frame": pts[k]["denoised"]}) for k in ks}
     for label, r in rows.items():
         if label.startswith("pt"):
             continue
-        spp = max(1.0, (r["ms_per_frame"] - a) / b)
+        spp = fit.spp_at(r["ms_per_frame"])
         i = max(0, min(len(ks) - 2, max([j for j, k in enumerate(ks) if k <= spp] or [0])))
-        lo, hi = ks[i], ks[i + 1]
-        t = (math.log(spp) - math.log(lo)) / (math.log(hi) - math.log(lo))
-        e = math.exp((1 - t) * math.log(pts[lo]["denoised"]) + t * math.log(pts[hi]["denoised"]))
+        e = at_spp(results[ks[i]], results[ks[i + 1]], spp, "relmse_denoised_frame")
         r["spp"], r["pt_denoised_there"], r["factor_denoised"] = spp, e, e / r["denoised"]
 
 
