@@ -372,6 +372,7 @@ def rays_per_frame(scene, method, width, height, max_depth, seed=1):
 def phase_projection(args, out):
     from benchmarks.bench_error_structure import SCENES, load
     from restir.compare import compare
+    from restir.compare.headline import at_spp
 
     rows = []
     for name, spec, aspect, _, depth in SCENES:
@@ -390,16 +391,13 @@ def phase_projection(args, out):
         r = compare(scene, methods, frames=args.frames, warmup=args.warmup, width=w, height=h, max_depth=depth,
                     reference_spp=args.ref_spp, denoise=True, correlation_runs=0, seed=args.seed)
         by = {m.label: m.metrics for m in r.methods}
+        pt_results = {m.spp: m for m in r.methods if m.method == "pt"}
 
         def pt_at(k, key):
-            return by["pt" if k == 1 else f"pt:spp={k}"][key]
+            return pt_results[k].metrics[key]
 
-        def pt_between(m, key):
-            lo, hi = spp[m][0], spp[m][-1]
-            if lo == hi:
-                return pt_at(lo, key)
-            t = (math.log(ratio[m]) - math.log(lo)) / (math.log(hi) - math.log(lo))
-            return math.exp((1 - t) * math.log(pt_at(lo, key)) + t * math.log(pt_at(hi, key)))
+        def pt_between(m, key):  # restir compare's own interpolation (headline.at_spp)
+            return at_spp(pt_results[spp[m][0]], pt_results[spp[m][-1]], ratio[m], key)
 
         print(f"\n## {name} ({w}x{h}), rays per pixel per frame: " + ", ".join(f"{m} {v:.2f}" for m, v in rays.items()))
         print("| scene | method | rays / pt's | raw | denoised | " + " | ".join(f"pt {k} spp, denoised" for k in pts)
