@@ -64,10 +64,10 @@ SCENES = {
 }
 
 
-def fd_jacobians(name, shift, mutation="none", offset=(5, 3)):
+def fd_jacobians(name, shift, mutation="none", offset=(5, 3), device="cpu"):
     scene = SCENES[name]()
     scene.camera.width = scene.camera.height = SIZE
-    cfg = restir.RenderConfig(method="restir-pt", spp=1, max_depth=6, seed=5,
+    cfg = restir.RenderConfig(method="restir-pt", spp=1, max_depth=6, seed=5, device=device,
                               settings={"shift": shift, "direct": "pt", "temporal": False, "spatial.rounds": 0})
     integ = make_integrator(scene, cfg)
     integ.render_frame(0)
@@ -79,9 +79,10 @@ CASES = [("cornell-box", "reconnection"), ("cornell-box-glossy", "reconnection")
          ("veach-bidir", "hybrid")]
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("name,shift", CASES)
-def test_shift_jacobian_matches_finite_differences(name, shift):
-    shifted = fd_jacobians(name, shift)
+def test_shift_jacobian_matches_finite_differences(name, shift, device):
+    shifted = fd_jacobians(name, shift, device=device)
     o = well_conditioned(shifted)
     rel = relative_errors(o)
     print(describe(name, shift, o, rel), f"; grazing or J outside {J_RANGE} (left out): {len(shifted) - len(o)}")

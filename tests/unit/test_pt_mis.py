@@ -120,11 +120,11 @@ def make_mis_kernel(shift):
 _kernels = {}
 
 
-def mis_sums(scene_spec, shift, mutation="none", size=64):
+def mis_sums(scene_spec, shift, mutation="none", size=64, device="cpu"):
     if mutation not in _kernels:
         _kernels[mutation] = make_mis_kernel(shift_path if mutation == "none" else make_shift(mutation))
     scene = restir.load_scene(scene_spec, width=size, height=size)
-    cfg = restir.RenderConfig(method="restir-pt", spp=1, max_depth=5, seed=11,
+    cfg = restir.RenderConfig(method="restir-pt", spp=1, max_depth=5, seed=11, device=device,
                               settings={"shift": shift, "direct": "pt", "temporal": False, "spatial.rounds": 0})
     integ = make_integrator(scene, cfg)
     integ.render_frame(0)
@@ -140,10 +140,11 @@ def bad_fraction(o):
     return float(np.mean(np.abs(o[:, 1] - 1) > TOL)), float(np.mean(np.abs(o[:, 3] - 1) > TOL))
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
 @pytest.mark.parametrize("scene", ["builtin:indirect-room", "builtin:cornell-box-glossy"])
-def test_reuse_mis_weights_sum_to_one(scene, shift):
-    o = mis_sums(scene, shift)
+def test_reuse_mis_weights_sum_to_one(scene, shift, device):
+    o = mis_sums(scene, shift, device=device)
     spatial_bad, temporal_bad = bad_fraction(o)
     print(f"{scene} {shift}: {len(o)} paths; spatial: {np.mean(o[:, 2] > 0):.1%} produced by a neighbour too, "
           f"sum off by > {TOL} for {spatial_bad:.3%} (max |sum - 1| {np.max(np.abs(o[:, 1] - 1)):.2e}); temporal: "

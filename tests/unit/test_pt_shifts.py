@@ -16,8 +16,8 @@ from restir.api import make_integrator
 from tests.unit.shift_harness import assert_identity_and_round_trip, run_round_trips
 
 
-def base_paths(scene, shift, direct="restir-di", max_depth=5):
-    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=1, seed=7,
+def base_paths(scene, shift, direct="restir-di", max_depth=5, device="cpu"):
+    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=1, seed=7, device=device,
                               max_depth=max_depth,
                               settings={"shift": shift, "direct": direct, "temporal": False, "spatial.rounds": 0})
     integ = make_integrator(scene, cfg)
@@ -36,15 +36,16 @@ SCENES = ["builtin:cornell-box", pytest.param("builtin:cornell-box-glossy", mark
           "builtin:indirect-room"]
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("direct", ["restir-di", "pt"])
 @pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
 @pytest.mark.parametrize("scene", SCENES)
-def test_identity_and_round_trip(scene, shift, direct):
-    check_identity_and_round_trip(scene, shift, direct)
+def test_identity_and_round_trip(scene, shift, direct, device):
+    check_identity_and_round_trip(scene, shift, direct, device=device)
 
 
-def check_identity_and_round_trip(scene, shift, direct, mutation="none"):
-    assert_identity_and_round_trip(round_trips(scene, shift, direct, mutation=mutation), shift,
+def check_identity_and_round_trip(scene, shift, direct, mutation="none", device="cpu"):
+    assert_identity_and_round_trip(round_trips(scene, shift, direct, mutation=mutation, device=device), shift,
                                    f"{scene} {shift} {direct}")
 
 

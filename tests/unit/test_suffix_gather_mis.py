@@ -94,12 +94,12 @@ def make_kernel(gather):
 _kernels = {}
 
 
-def gather_sums(scene_spec, settings, mutation="none", size=48):
+def gather_sums(scene_spec, settings, mutation="none", size=48, device="cpu"):
     if mutation not in _kernels:
         g = make_gather() if mutation == "none" else make_gather(module="unique", mutation=mutation)
         _kernels[mutation] = make_kernel(g)
     scene = restir.load_scene(scene_spec, width=size, height=size)
-    cfg = restir.RenderConfig(method="suffix-restir", spp=1, max_depth=5, seed=3, settings=settings)
+    cfg = restir.RenderConfig(method="suffix-restir", spp=1, max_depth=5, seed=3, settings=settings, device=device)
     integ = make_integrator(scene, cfg)
     integ.render_frame(0)  # the history: resampled prefixes, boxes, final suffixes (then swapped)
     integ.render_frame(1)
@@ -113,10 +113,11 @@ def gather_sums(scene_spec, settings, mutation="none", size=48):
     return o[o[:, 0] > 0]
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("mis", ["talbot", "pairwise"])
 @pytest.mark.parametrize("scene", ["builtin:indirect-room", "builtin:cornell-box-glossy"])
-def test_gather_weights_sum_to_one(scene, mis):
-    o = gather_sums(scene, {"gather.suffixes": 4, "gather.mis": mis})
+def test_gather_weights_sum_to_one(scene, mis, device):
+    o = gather_sums(scene, {"gather.suffixes": 4, "gather.mis": mis}, device=device)
     err = np.abs(o[:, 1] - 1)
     print(f"{scene} {mis}: {len(o)} suffixes; produced by a neighbour too: {np.mean(o[:, 2] > 0):.1%}; slots with "
           f"an empty reservoir: {o[:, 3].sum():.0f}; max |sum - 1| {err.max():.2e}")

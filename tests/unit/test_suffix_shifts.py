@@ -14,12 +14,12 @@ from tests.unit.shift_harness import (assert_identity_and_round_trip, describe, 
                                      well_conditioned)
 
 
-def suffixes(scene_spec, shift, size, direct="pt", max_depth=6, **settings):
+def suffixes(scene_spec, shift, size, direct="pt", max_depth=6, device="cpu", **settings):
     """One frame without reuse: each pixel's suffix at its prefix end; (integrator, params, prefix
     G-buffer, suffix reservoirs)."""
     scene = restir.load_scene(scene_spec)
     scene.camera.width = scene.camera.height = size
-    cfg = restir.RenderConfig(method="suffix-restir", spp=1, frames=1, seed=7, max_depth=max_depth,
+    cfg = restir.RenderConfig(method="suffix-restir", spp=1, frames=1, seed=7, max_depth=max_depth, device=device,
                               settings={"shift": shift, "direct": direct, "prefix.temporal": False,
                                         "suffix.temporal": False, "suffix.spatial.rounds": 0, **settings})
     integ = make_integrator(scene, cfg)
@@ -28,18 +28,20 @@ def suffixes(scene_spec, shift, size, direct="pt", max_depth=6, **settings):
     return integ, p, integ.prefix_gbs.previous, integ.reservoirs.previous
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
 @pytest.mark.parametrize("scene", ["builtin:indirect-room", "builtin:cornell-box-glossy"])
-def test_suffix_identity_and_round_trip(scene, shift):
-    integ, p, gb, res = suffixes(scene, shift, 48)
+def test_suffix_identity_and_round_trip(scene, shift, device):
+    integ, p, gb, res = suffixes(scene, shift, 48, device=device)
     # pixels 3 px apart have unrelated prefix ends (random first bounces): fewer shifts succeed
     assert_identity_and_round_trip(run_round_trips(integ, p, gb, res), shift, f"suffixes {scene} {shift}",
                                    min_success=0.1)
 
 
+@pytest.mark.gpu
 @pytest.mark.parametrize("shift", ["hybrid", "reconnection"])
-def test_suffix_jacobian_matches_finite_differences(shift):
-    integ, p, gb, res = suffixes("builtin:cornell-box-glossy", shift, 96)
+def test_suffix_jacobian_matches_finite_differences(shift, device):
+    integ, p, gb, res = suffixes("builtin:cornell-box-glossy", shift, 96, device=device)
     o = well_conditioned(run_fd(integ, p, gb, res))
     rel = relative_errors(o)
     print(describe("suffixes, glossy Cornell box", shift, o, rel))
