@@ -3,7 +3,7 @@ PY ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench clean browser
+.PHONY: demo test test-slow test-debug bench clean browser gpu-bundle gpu-check gpu-rehearse
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PY) -m venv $(VENV)
@@ -32,8 +32,28 @@ browser:
 test: $(STAMP) browser
 	$(VENV)/bin/pytest -q -n auto --dist loadfile
 
-test-slow: $(STAMP) browser
+test-slow: $(STAMP) browser test-debug
 	$(VENV)/bin/pytest -q -m slow
+
+# The fast tier's kernels under Warp's debug mode: every array access bounds-checked (an access
+# out of bounds aborts with the kernel's source line; on a GPU it would read another buffer or crash).
+test-debug: $(STAMP)
+	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile $(DEBUG_TESTS)
+
+# The GPU check (docs/gpu.md): on a device machine it runs as `python3 gpu/check.py`; here
+# `make gpu-check DEVICE=cpu QUICK=1` runs the same phases at toy sizes.
+DEVICE ?= cuda
+gpu-check: $(STAMP)
+	$(VENV)/bin/python gpu/check.py --device $(DEVICE) $(if $(QUICK),--quick) --out $(or $(GPU_OUT),out/gpu-check)
+
+# What a bare device machine lacks (Warp, OIDN, ...), packed in parts that fit the device calls: .gpu-bundle/
+gpu-bundle: $(STAMP)
+	$(VENV)/bin/python gpu/bundle.py
+
+# The bundle end to end here: the parts installed into a fresh Python 3.12 with the device's
+# packages, imported, and the check run from it on the CPU at toy sizes.
+gpu-rehearse: gpu-bundle
+	bash gpu/rehearse.sh
 
 clean:
 	rm -rf out .pytest_cache

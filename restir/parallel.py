@@ -9,7 +9,9 @@ On CUDA the launch is one grid.
 
 Consequence: Warp's atomics are not atomic between CPU slices (Warp assumes one host thread
 per launch), so a kernel launched here must not accumulate into shared memory with atomics;
-it writes per-item outputs that are reduced afterwards.
+it writes per-item outputs that are reduced afterwards. Nor may it use Warp's tiles: Warp 1.19
+keeps a CPU launch's tile memory through one pointer per module, shared by the slices' threads
+(which is also why the debug-mode test run turns `enable_tiles_in_stack_memory` off).
 """
 import os
 from concurrent.futures import ThreadPoolExecutor

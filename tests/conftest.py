@@ -17,6 +17,12 @@ from tests import devices
 
 if os.environ.get("RESTIR_WARP_DEBUG", "") == "1":
     wp.config.mode = "debug"
+    # Warp 1.19 tracks a CPU launch's tile memory through one pointer per module, not per thread;
+    # debug builds check it at the end of each launch, so two overlapping launches of one module
+    # (the CPU slices of restir/parallel.py) read a pointer the other launch has reset and crash.
+    # No kernel here uses tiles: with the tile memory out of the stack the check reads a static
+    # block instead, and the slices stay concurrent.
+    wp.config.enable_tiles_in_stack_memory = False
 if os.environ.get("RESTIR_WARP_VERIFY_FP", "") == "1":
     wp.config.verify_fp = True
 

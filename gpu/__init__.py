@@ -1,0 +1,1 @@
+"""The GPU check and the bundle that brings it to a bare device machine (docs/gpu.md)."""

@@ -1,0 +1,235 @@
+"""`make gpu-bundle`: what a device machine needs and does not have, packed to travel in parts.
+
+A device call carries the working tree and at most 64 MiB (docs/gpu.md). The machine has Python,
+numpy, scipy, pytest, pytest-xdist, rich and Pillow, but not Warp, whose wheel alone is 149 MB.
+This script:
+
+1. downloads the wheels of the packages the device lacks, at the versions installed here, for
+   the device's Python (cp312, manylinux x86-64): warp-lang, OpenEXR, plyfile, flip-evaluator,
+   pyoidn with cffi and pycparser (Embree and plotly stay behind: the CPU tracer falls back to
+   Warp's BVH, and the HTML report is not part of the check);
+2. unpacks them into one site folder (what `pip install --target` makes of these wheels), less
+   Warp's tests and examples and OIDN's libraries for AMD and Intel GPUs; files that are copies
+   of one another (a library under its three names) become links;
+3. adds the scenes the check renders (veach-ajar, staircase2 from ../shared/scenes) and the CPU
+   side of the check's agreement phase (rendered here: the device's minutes are scarcer);
+4. packs it all as one .tar.xz, and splits that into parts that each fit in one call beside the
+   working tree: .gpu-bundle/part1/, part2/, ... each with the manifest (sizes, SHA-256s,
+   commit, the commands to run).
+
+gpu/install.py unpacks it on the device, part by part. The wheels are cached in
+.gpu-bundle/wheels and the packed site in .gpu-bundle/cache (keyed by the wheels), so that a
+second bundle only redoes the scenes, the CPU runs and the split.
+"""
+import argparse
+import hashlib
+import io
+import json
+import lzma
+import os
+import shutil
+import subprocess
+import sys
+import tarfile
+import zipfile
+from importlib import metadata
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from gpu.install import PART_NAME, STASH, manifest_name  # noqa: E402
+
+PACKAGES = ["warp-lang", "OpenEXR", "plyfile", "flip-evaluator", "pyoidn", "cffi", "pycparser"]
+CALL_LIMIT = 64 * 2**20  # what one device call carries: the working tree and the named paths
+MARGIN = 2 * 2**20
+PLATFORMS = ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64",
+             "manylinux1_x86_64"]
+# Left out of the site folder: Warp's own tests and examples (about 12 MB), OIDN's AMD (HIP) and
+# Intel (SYCL, Level Zero) devices and their loaders (about 45 MB).
+DROP = ("warp/tests/", "warp/examples/", "libOpenImageDenoise_device_hip", "libOpenImageDenoise_device_sycl",
+        "libsycl.so", "libur_", "libumf.so")
+SCENES = ("veach-ajar", "staircase2")
+
+
+def tree_bytes() -> int:
+    """What the working tree sends with every call: tracked files and untracked ones git does not
+    ignore (the device tool's rule)."""
+    out = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"], cwd=ROOT,
+                         capture_output=True, check=True).stdout
+    return sum((ROOT / p).stat().st_size for p in out.decode().split("\0") if p and (ROOT / p).is_file())
+
+
+def download(wheels: Path, python: str) -> list[Path]:
+    wheels.mkdir(parents=True, exist_ok=True)
+    found = []
+    for name in PACKAGES:
+        version = metadata.version(name)
+        norm = name.lower().replace("-", "_")
+        have = [w for w in wheels.glob("*.whl") if w.name.lower().startswith(norm + "-" + version.lower())
+                and (f"cp{python}" in w.name or "py3-none" in w.name or "py2.py3" in w.name)]
+        if not have:
+            cmd = [sys.executable, "-m", "pip", "download", "-q", "--no-deps", "--only-binary=:all:",
+                   "--python-version", python, "--implementation", "cp", "-d", str(wheels), f"{name}=={version}"]
+            for p in PLATFORMS:
+                cmd += ["--platform", p]
+            subprocess.run(cmd, check=True)
+            have = [w for w in wheels.glob("*.whl") if w.name.lower().startswith(norm + "-" + version.lower())]
+        found.append(sorted(have)[-1])
+    return found
+
+
+def site_files(wheel_paths: list[Path]):
+    """(path in the site folder, bytes, mode) of every file the wheels install, less DROP."""
+    for whl in wheel_paths:
+        with zipfile.ZipFile(whl) as z:
+            for info in z.infolist():
+                if info.is_dir() or any(d in info.filename for d in DROP):
+                    continue
+                mode = (info.external_attr >> 16) & 0o777 or 0o644
+                yield info.filename, z.read(info), mode
+
+
+def pack_site(wheel_paths: list[Path], cache: Path) -> Path:
+    """site.tar (uncompressed; compressed with the rest later), cached by the wheels' names."""
+    key = hashlib.sha256("\n".join(sorted(w.name for w in wheel_paths)).encode()).hexdigest()[:12]
+    out = cache / f"site-{key}.tar"
+    if out.exists():
+        return out
+    cache.mkdir(parents=True, exist_ok=True)
+    seen: dict[str, str] = {}  # content hash -> first path: later copies become links
+    tmp = out.with_suffix(".part")
+    with tarfile.open(tmp, "w") as tar:
+        for name, data, mode in sorted(site_files(wheel_paths), key=lambda x: x[0]):
+            arc = "site/" + name
+            digest = hashlib.sha256(data).hexdigest()
+            if digest in seen and len(data) > 65536 and os.path.dirname(seen[digest]) == os.path.dirname(arc):
+                info = tarfile.TarInfo(arc)
+                info.type, info.linkname = tarfile.SYMTYPE, os.path.basename(seen[digest])
+                tar.addfile(info)
+                continue
+            seen.setdefault(digest, arc)
+            info = tarfile.TarInfo(arc)
+            info.size, info.mode = len(data), mode
+            tar.addfile(info, io.BytesIO(data))
+    tmp.rename(out)
+    return out
+
+
+def compress(src_tars: list[Path], extra: dict[str, Path], out: Path) -> None:
+    """One .tar.xz of the site tar's members and the extra files (name in the archive -> path)."""
+    raw = out.with_suffix(".tar")
+    with tarfile.open(raw, "w") as tar:
+        for t in src_tars:
+            with tarfile.open(t) as src:
+                for m in src.getmembers():
+                    tar.addfile(m, src.extractfile(m) if m.isfile() else None)
+        for arc, path in extra.items():
+            tar.add(path, arcname=arc)
+    if shutil.which("xz"):  # multi-threaded, the same format as Python's lzma
+        subprocess.run(["xz", "-9", "-T0", "-f", "-k", str(raw)], check=True)
+        Path(str(raw) + ".xz").rename(out)
+    else:
+        with open(raw, "rb") as f, lzma.open(out, "wb", preset=9) as g:
+            shutil.copyfileobj(f, g, 1 << 20)
+    raw.unlink()
+
+
+def split(archive: Path, folder: Path, part_bytes: int, manifest: dict) -> list[Path]:
+    for old in folder.glob("part*"):
+        shutil.rmtree(old)
+    size = archive.stat().st_size
+    n = (size + part_bytes - 1) // part_bytes
+    manifest.update(archive=archive.name, archive_bytes=size, archive_sha256=sha256(archive), parts=[])
+    parts = []
+    with open(archive, "rb") as f:
+        for i in range(n):
+            d = folder / PART_NAME.format(i + 1)
+            d.mkdir(parents=True)
+            p = d / f"{archive.name}.{i + 1:03d}"
+            data = f.read(part_bytes)
+            p.write_bytes(data)
+            manifest["parts"].append({"file": p.name, "bytes": len(data),
+                                      "sha256": hashlib.sha256(data).hexdigest()})
+            parts.append(d)
+    for d in parts:
+        (d / manifest_name()).write_text(json.dumps(manifest, indent=1))
+    return parts
+
+
+def sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def commands(parts: list[Path], scenes: bool) -> list[dict]:
+    """The device calls, in order: each carries one part; the last installs and runs the check."""
+    calls = []
+    for i, d in enumerate(parts):
+        rel = os.path.relpath(d, ROOT)
+        cmd = f"python3 gpu/install.py {rel}"
+        if i == len(parts) - 1:
+            cmd += (f" && PYTHONPATH={STASH}/site PYTHONUNBUFFERED=1 python3 gpu/check.py --device cuda --out $OUT"
+                    f"{f' --scenes {STASH}/scenes' if scenes else ''} --cpu-runs {STASH}/cpu_runs.npz")
+        calls.append({"carry": [rel], "command": cmd, "timeout_s": 600 if i == len(parts) - 1 else 120})
+    return calls
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=str(ROOT / ".gpu-bundle"), help="the bundle's folder (git-ignored)")
+    ap.add_argument("--python", default="312", help="the device's Python, as pip's --python-version (312)")
+    ap.add_argument("--scenes", default=str(ROOT.parent / "shared" / "scenes"), help="where veach-ajar/ and "
+                    "staircase2/ are")
+    ap.add_argument("--no-cpu-runs", action="store_true", help="leave the agreement phase's CPU runs to the device")
+    ap.add_argument("--part-mib", type=float, help="part size (default: what fits in a call beside the tree)")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    wheels = download(out / "wheels", args.python)
+    print("wheels:", ", ".join(w.name for w in wheels), flush=True)
+    site = pack_site(wheels, out / "cache")
+    extra = {}
+    scenes = Path(args.scenes)
+    for s in SCENES:
+        if (scenes / s / "scene.xml").exists():
+            extra[f"scenes/{s}"] = scenes / s
+        else:
+            print(f"no {scenes / s}/scene.xml: the check's timing leaves that scene out", flush=True)
+    if not args.no_cpu_runs:
+        from gpu.check import Sizes, save_cpu_runs
+
+        runs = out / "cache" / "cpu_runs.npz"
+        print("rendering the agreement phase's CPU runs", flush=True)
+        save_cpu_runs(str(runs), Sizes())
+        extra["cpu_runs.npz"] = runs
+    archive = out / "cache" / "restir-gpu.tar.xz"
+    print("compressing (xz -9)", flush=True)
+    compress([site], extra, archive)
+
+    tree = tree_bytes()
+    part_bytes = int(args.part_mib * 2**20) if args.part_mib else CALL_LIMIT - tree - MARGIN
+    from gpu.check import commit, source_hash
+
+    manifest = {"commit": commit(), "source_hash": source_hash(), "python": args.python,
+                "wheels": [w.name for w in wheels], "tree_bytes": tree, "part_limit_bytes": part_bytes}
+    parts = split(archive, out, part_bytes, manifest)
+    manifest["calls"] = commands(parts, bool([k for k in extra if k.startswith("scenes/")]))
+    for d in parts:
+        (d / manifest_name()).write_text(json.dumps(manifest, indent=1))
+    (out / "calls.json").write_text(json.dumps(manifest["calls"], indent=1))
+    print(f"\n{len(parts)} parts of at most {part_bytes / 2**20:.1f} MiB (the working tree sends "
+          f"{tree / 2**20:.1f} MiB with each call); the device calls, in order (also in {out / 'calls.json'}):")
+    for c in manifest["calls"]:
+        print(f"  run(carry={c['carry']}, timeout_s={c['timeout_s']}, command={c['command']!r})")
+        assert len(c["command"]) <= 2000
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
