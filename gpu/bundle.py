@@ -117,42 +117,65 @@ def pack_site(wheel_paths: list[Path], cache: Path) -> Path:
     return out
 
 
-def compress(src_tars: list[Path], extra: dict[str, Path], out: Path) -> None:
-    """One .tar.xz of the site tar's members and the extra files (name in the archive -> path)."""
-    raw = out.with_suffix(".tar")
-    with tarfile.open(raw, "w") as tar:
-        for t in src_tars:
-            with tarfile.open(t) as src:
-                for m in src.getmembers():
-                    tar.addfile(m, src.extractfile(m) if m.isfile() else None)
-        for arc, path in extra.items():
-            tar.add(path, arcname=arc)
+def xz(raw: Path, out: Path) -> None:
+    """raw -> out (.xz, preset 9), raw removed."""
     if shutil.which("xz"):  # multi-threaded, the same format as Python's lzma
-        subprocess.run(["xz", "-9", "-T0", "-f", "-k", str(raw)], check=True)
-        Path(str(raw) + ".xz").rename(out)
+        subprocess.run(["xz", "-9", "-T0", "-f", "-k", "-c", str(raw)], stdout=open(out, "wb"), check=True)
     else:
         with open(raw, "rb") as f, lzma.open(out, "wb", preset=9) as g:
             shutil.copyfileobj(f, g, 1 << 20)
     raw.unlink()
 
 
-def split(archive: Path, folder: Path, part_bytes: int, manifest: dict) -> list[Path]:
+def compressed_site(site_tar: Path) -> Path:
+    """The site tar compressed once (minutes) and cached beside it."""
+    out = site_tar.with_suffix(".tar.xz")
+    if not out.exists():
+        tmp = out.with_suffix(".part")
+        raw = site_tar.with_suffix(".copy")
+        shutil.copy(site_tar, raw)
+        xz(raw, tmp)
+        tmp.rename(out)
+    return out
+
+
+def extras_archive(extra: dict[str, Path], out: Path) -> None:
+    """The scenes and the CPU runs (they change with the code and the shared scenes) as a small
+    .tar.xz of their own, so that a new bundle does not compress the packages again."""
+    raw = out.with_suffix(".tmp")
+    with tarfile.open(raw, "w") as tar:
+        for arc, path in extra.items():
+            tar.add(path, arcname=arc)
+    xz(raw, out)
+
+
+def split(archives: list[Path], folder: Path, part_bytes: int, manifest: dict) -> list[Path]:
+    """Every archive cut into pieces of at most part_bytes, packed into as few parts (folders of
+    at most part_bytes) as fit, in order; the manifest lists each piece with its SHA-256."""
     for old in folder.glob("part*"):
         shutil.rmtree(old)
-    size = archive.stat().st_size
-    n = (size + part_bytes - 1) // part_bytes
-    manifest.update(archive=archive.name, archive_bytes=size, archive_sha256=sha256(archive), parts=[])
-    parts = []
-    with open(archive, "rb") as f:
-        for i in range(n):
-            d = folder / PART_NAME.format(i + 1)
-            d.mkdir(parents=True)
-            p = d / f"{archive.name}.{i + 1:03d}"
-            data = f.read(part_bytes)
-            p.write_bytes(data)
-            manifest["parts"].append({"file": p.name, "bytes": len(data),
-                                      "sha256": hashlib.sha256(data).hexdigest()})
-            parts.append(d)
+    manifest.update(archives=[], pieces=[])
+    parts: list[Path] = []
+    used = part_bytes
+    for archive in archives:
+        manifest["archives"].append({"file": archive.name, "bytes": archive.stat().st_size,
+                                     "sha256": sha256(archive)})
+        remaining = archive.stat().st_size
+        with open(archive, "rb") as f:
+            k = 0
+            while remaining > 0:
+                if used >= part_bytes:
+                    parts.append(folder / PART_NAME.format(len(parts) + 1))
+                    parts[-1].mkdir(parents=True)
+                    used = 0
+                data = f.read(min(part_bytes - used, remaining))
+                remaining -= len(data)
+                k += 1
+                piece = parts[-1] / f"{archive.name}.{k:03d}"
+                piece.write_bytes(data)
+                used += len(data)
+                manifest["pieces"].append({"archive": archive.name, "file": piece.name, "bytes": len(data),
+                                           "sha256": hashlib.sha256(data).hexdigest()})
     for d in parts:
         (d / manifest_name()).write_text(json.dumps(manifest, indent=1))
     return parts
@@ -208,9 +231,11 @@ def main(argv=None) -> int:
         print("rendering the agreement phase's CPU runs", flush=True)
         save_cpu_runs(str(runs), Sizes())
         extra["cpu_runs.npz"] = runs
-    archive = out / "cache" / "restir-gpu.tar.xz"
-    print("compressing (xz -9)", flush=True)
-    compress([site], extra, archive)
+    print("compressing the packages (xz -9; cached after the first time)", flush=True)
+    archives = [compressed_site(site)]
+    if extra:
+        archives.append(out / "cache" / "extras.tar.xz")
+        extras_archive(extra, archives[-1])
 
     tree = tree_bytes()
     part_bytes = int(args.part_mib * 2**20) if args.part_mib else CALL_LIMIT - tree - MARGIN
@@ -218,7 +243,7 @@ def main(argv=None) -> int:
 
     manifest = {"commit": commit(), "source_hash": source_hash(), "python": args.python,
                 "wheels": [w.name for w in wheels], "tree_bytes": tree, "part_limit_bytes": part_bytes}
-    parts = split(archive, out, part_bytes, manifest)
+    parts = split(archives, out, part_bytes, manifest)
     manifest["calls"] = commands(parts, bool([k for k in extra if k.startswith("scenes/")]))
     for d in parts:
         (d / manifest_name()).write_text(json.dumps(manifest, indent=1))

@@ -65,33 +65,35 @@ def install(part_dir: Path, stash: Path) -> int:
             shutil.copy2(f, stash / f.name)
             print(f"stashed {f.name} ({f.stat().st_size / 2**20:.1f} MiB) in {stash}")
     (stash / manifest_name()).write_text(json.dumps(manifest))
-    missing = [p["file"] for p in manifest["parts"] if not (stash / p["file"]).exists()]
+    pieces = manifest["pieces"]
+    missing = [p["file"] for p in pieces if not (stash / p["file"]).exists()]
     if missing:
         print(f"waiting for {', '.join(missing)}: carry the other parts in the next calls (docs/gpu.md)")
         return 0
-    for p in manifest["parts"]:
+    for p in pieces:
         path = stash / p["file"]
         if path.stat().st_size != p["bytes"] or sha256_of([path]) != p["sha256"]:
-            print(f"error: {p['file']} is damaged (size or SHA-256 differs from the manifest); carry it again")
+            print(f"error: {p['file']} is damaged (size or SHA-256 differs from the manifest); carry its part again")
             return 1
     t = time.perf_counter()
-    parts = [stash / p["file"] for p in manifest["parts"]]
     for sub in ("site", "scenes", "cpu_runs.npz"):
         target = stash / sub
         if target.is_dir():
             shutil.rmtree(target)
         elif target.exists():
             target.unlink()
-    with lzma.LZMAFile(Chain(parts)) as xz, tarfile.open(fileobj=xz, mode="r|") as tar:
-        for member in tar:
-            if member.name.startswith("/") or ".." in Path(member.name).parts:
-                print(f"error: {member.name} would unpack outside {stash}")
-                return 1
-            tar.extract(member, stash, **({"filter": "tar"} if hasattr(tarfile, "tar_filter") else {}))
-    for p in parts:
-        p.unlink()
-    print(f"unpacked {manifest['archive']} (commit {manifest['commit'][:12]}) into {stash} in "
-          f"{time.perf_counter() - t:.1f} s: PYTHONPATH={stash}/site")
+    for archive in manifest["archives"]:
+        paths = [stash / p["file"] for p in pieces if p["archive"] == archive["file"]]
+        with lzma.LZMAFile(Chain(paths)) as xz, tarfile.open(fileobj=xz, mode="r|") as tar:
+            for member in tar:
+                if member.name.startswith("/") or ".." in Path(member.name).parts:
+                    print(f"error: {member.name} would unpack outside {stash}")
+                    return 1
+                tar.extract(member, stash, **({"filter": "tar"} if hasattr(tarfile, "tar_filter") else {}))
+        for path in paths:
+            path.unlink()
+    print(f"unpacked {', '.join(a['file'] for a in manifest['archives'])} (commit {manifest['commit'][:12]}) into "
+          f"{stash} in {time.perf_counter() - t:.1f} s: PYTHONPATH={stash}/site")
     return 0
 
 

@@ -34,7 +34,9 @@ def parts(tmp_path):
     small_archive(archive)
     out = tmp_path / "bundle"
     out.mkdir()
-    return split(archive, out, 1000, {"commit": "abc"})
+    second = tmp_path / "extras.tar.xz"
+    small_archive(second)
+    return split([archive, second], out, 1000, {"commit": "abc"})
 
 
 def test_parts_carried_one_call_at_a_time_unpack_into_the_stash(parts, tmp_path):
@@ -66,4 +68,5 @@ def test_the_device_calls_fit_the_tool(parts):
     assert all(len(c["command"]) <= 2000 and len(c["carry"]) == 1 for c in calls)
     assert "gpu/check.py --device cuda" in calls[-1]["command"] and "check.py" not in calls[0]["command"]
     manifest = json.loads((parts[0] / "manifest.json").read_text())
-    assert [p["file"] for p in manifest["parts"]] == sorted(p["file"] for p in manifest["parts"])
+    assert {p["archive"] for p in manifest["pieces"]} == {"bundle.tar.xz", "extras.tar.xz"}
+    assert sum(p["bytes"] for p in manifest["pieces"]) == sum(a["bytes"] for a in manifest["archives"])
