@@ -35,8 +35,11 @@ test: $(STAMP) browser
 test-slow: $(STAMP) browser test-debug
 	$(VENV)/bin/pytest -q -m slow
 
-# The fast tier's kernels under Warp's debug mode: every array access bounds-checked (an access
-# out of bounds aborts with the kernel's source line; on a GPU it would read another buffer or crash).
+# The shipped kernels under Warp's debug mode: every array access bounds-checked (an access out of
+# bounds aborts with the kernel's source line; on a GPU it would read another buffer or crash).
+# The slicing and determinism tests launch every pixel stage of every method; DEBUG_TESTS= runs
+# the whole fast tier so.
+DEBUG_TESTS ?= tests/integration/test_slicing.py tests/integration/test_determinism.py
 test-debug: $(STAMP)
 	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile $(DEBUG_TESTS)
 

@@ -11,15 +11,17 @@ This script:
 2. unpacks them into one site folder (what `pip install --target` makes of these wheels), less
    Warp's tests and examples and OIDN's libraries for AMD and Intel GPUs; files that are copies
    of one another (a library under its three names) become links;
-3. adds the scenes the check renders (veach-ajar, staircase2 from ../shared/scenes) and the CPU
-   side of the check's agreement phase (rendered here: the device's minutes are scarcer);
+3. adds the scenes the check renders (veach-ajar, staircase2 from ../shared/scenes), the shipped
+   kernels compiled for sm_90 in a Warp kernel cache, and the CPU side of the check's agreement
+   phase (compiled and rendered here: the device's minutes are scarcer);
 4. packs it all as one .tar.xz, and splits that into parts that each fit in one call beside the
    working tree: .gpu-bundle/part1/, part2/, ... each with the manifest (sizes, SHA-256s,
    commit, the commands to run).
 
 gpu/install.py unpacks it on the device, part by part. The wheels are cached in
 .gpu-bundle/wheels and the packed site in .gpu-bundle/cache (keyed by the wheels), so that a
-second bundle only redoes the scenes, the CPU runs and the split.
+second bundle only redoes the scenes, the kernels and CPU runs (when the sources changed) and
+the split.
 """
 import argparse
 import hashlib
@@ -117,6 +119,43 @@ def pack_site(wheel_paths: list[Path], cache: Path) -> Path:
     return out
 
 
+def precompile(cache: Path, source_hash: str) -> Path:
+    """The shipped kernels compiled for the device's card into a Warp kernel cache (sm_90 cubins,
+    what Warp 1.19 loads on an H100 or H200 when its CUDA toolkit, 13.4, is newer than the
+    driver): the device loads them instead of compiling them, about 3 minutes of one core here.
+    Two processes (NVRTC is single-threaded), ReSTIR PT's and Suffix ReSTIR's modules on separate
+    ones. Cached by the sources' hash."""
+    from restir.kernel_modules import KERNEL_MODULES
+
+    out = cache / f"kernels-{source_hash}"
+    if (out / "complete").exists():
+        return out
+    shutil.rmtree(out, ignore_errors=True)
+    env = dict(os.environ, WARP_CACHE_PATH=str(out))
+    procs = [subprocess.Popen([sys.executable, __file__, "--precompile", *mods], env=env, cwd=ROOT)
+             for mods in (KERNEL_MODULES[0::2], KERNEL_MODULES[1::2])]
+    if any(p.wait() != 0 for p in procs):
+        raise SystemExit("error: compiling the kernels for sm_90 failed")
+    for f in out.rglob("*.cu"):  # the generated sources: not needed to load
+        f.unlink()
+    (out / "complete").touch()
+    return out
+
+
+def compile_for_device(modules: list[str]) -> None:
+    """(In a process of its own, WARP_CACHE_PATH set) compile `modules` for sm_90 into the cache."""
+    import warp as wp
+
+    import restir  # noqa: F401  (the project's Warp options, which the modules' hashes include)
+    from restir.kernel_modules import import_all
+
+    wp.init()
+    import_all()
+    for m in modules:
+        wp.compile_aot_module(m, arch=[90])
+        print(f"  compiled {m} for sm_90", flush=True)
+
+
 def xz(raw: Path, out: Path) -> None:
     """raw -> out (.xz, preset 9), raw removed."""
     if shutil.which("xz"):  # multi-threaded, the same format as Python's lzma
@@ -189,14 +228,15 @@ def sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def commands(parts: list[Path], scenes: bool) -> list[dict]:
+def commands(parts: list[Path], scenes: bool, kernels: bool = True) -> list[dict]:
     """The device calls, in order: each carries one part; the last installs and runs the check."""
     calls = []
     for i, d in enumerate(parts):
         rel = os.path.relpath(d, ROOT)
         cmd = f"python3 gpu/install.py {rel}"
         if i == len(parts) - 1:
-            cmd += (f" && PYTHONPATH={STASH}/site PYTHONUNBUFFERED=1 python3 gpu/check.py --device cuda --out $OUT"
+            cache = f"WARP_CACHE_PATH={STASH}/kernels " if kernels else ""
+            cmd += (f" && {cache}PYTHONPATH={STASH}/site PYTHONUNBUFFERED=1 python3 gpu/check.py --device cuda --out $OUT"
                     f"{f' --scenes {STASH}/scenes' if scenes else ''} --cpu-runs {STASH}/cpu_runs.npz")
         calls.append({"carry": [rel], "command": cmd, "timeout_s": 600 if i == len(parts) - 1 else 120})
     return calls
@@ -210,7 +250,12 @@ def main(argv=None) -> int:
                     "staircase2/ are")
     ap.add_argument("--no-cpu-runs", action="store_true", help="leave the agreement phase's CPU runs to the device")
     ap.add_argument("--part-mib", type=float, help="part size (default: what fits in a call beside the tree)")
+    ap.add_argument("--no-kernels", action="store_true", help="leave the kernels to be compiled on the device")
+    ap.add_argument("--precompile", nargs="+", metavar="MODULE", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.precompile:
+        compile_for_device(args.precompile)
+        return 0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -224,6 +269,11 @@ def main(argv=None) -> int:
             extra[f"scenes/{s}"] = scenes / s
         else:
             print(f"no {scenes / s}/scene.xml: the check's timing leaves that scene out", flush=True)
+    from gpu.check import source_hash
+
+    if not args.no_kernels:
+        print("compiling the kernels for sm_90 (cached by the sources)", flush=True)
+        extra["kernels"] = precompile(out / "cache", source_hash())
     if not args.no_cpu_runs:
         from gpu.check import Sizes, save_cpu_runs
 
@@ -239,12 +289,12 @@ def main(argv=None) -> int:
 
     tree = tree_bytes()
     part_bytes = int(args.part_mib * 2**20) if args.part_mib else CALL_LIMIT - tree - MARGIN
-    from gpu.check import commit, source_hash
+    from gpu.check import commit
 
     manifest = {"commit": commit(), "source_hash": source_hash(), "python": args.python,
                 "wheels": [w.name for w in wheels], "tree_bytes": tree, "part_limit_bytes": part_bytes}
     parts = split(archives, out, part_bytes, manifest)
-    manifest["calls"] = commands(parts, bool([k for k in extra if k.startswith("scenes/")]))
+    manifest["calls"] = commands(parts, any(k.startswith("scenes/") for k in extra), "kernels" in extra)
     for d in parts:
         (d / manifest_name()).write_text(json.dumps(manifest, indent=1))
     (out / "calls.json").write_text(json.dumps(manifest["calls"], indent=1))

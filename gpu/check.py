@@ -158,6 +158,11 @@ class Check:
             v = fn()
             if v:
                 env[f"cuda_{k}"] = ".".join(map(str, v))
+        if d.is_cuda:
+            try:
+                env["precompiled_kernels"] = precompiled(d)
+            except Exception as e:  # a diagnostic: the check goes on without it
+                env["precompiled_kernels"] = f"not determined ({type(e).__name__}: {e})"
         try:
             import pyoidn  # noqa: F401
 
@@ -346,6 +351,23 @@ class Check:
         (self.out / "gpu_check.md").write_text(markdown(self.results))
 
 
+def precompiled(device) -> dict:
+    """Which shipped kernel modules the device will load from the kernel cache (made by
+    `make gpu-bundle`) rather than compile: the file Warp looks for, and whether it is there."""
+    import warp as wp
+    from warp._src.context import get_module
+
+    from restir.kernel_modules import KERNEL_MODULES, import_all
+
+    import_all()
+    found, missing = [], []
+    for name in KERNEL_MODULES:
+        m = get_module(name)
+        path = Path(wp.config.kernel_cache_dir) / m.get_module_identifier() / m._get_compile_output_name(device)
+        (found if path.exists() else missing).append(path.name)
+    return {"cache": wp.config.kernel_cache_dir, "found": len(found), "missing": missing}
+
+
 def agreement_key(method: str, spec: str, s: Sizes) -> str:
     return (f"{method}|{spec}|{s.agreement_size}|{s.agreement_runs}|{s.agreement_frames}|{spp_of(method, s)}|"
             f"{max_depth_of(method)}")
@@ -382,6 +404,12 @@ def _has_oidn() -> bool:
         return False
 
 
+def table(columns: list, rows: list) -> list:
+    """A markdown table's lines, and a blank line after it."""
+    return (["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+            + ["| " + " | ".join(str(c) for c in row) + " |" for row in rows] + [""])
+
+
 def markdown(r: dict) -> str:
     """The results as the tables BENCHMARKS.md and the README quote."""
     ph = r["phases"]
@@ -389,7 +417,8 @@ def markdown(r: dict) -> str:
     lines = [f"# GPU check ({'quick, ' if r['quick'] else ''}device {r['device']})", "",
              f"- started {r['started']}, {r.get('elapsed_s')} s of a {r['budget_s']:.0f} s budget",
              f"- commit {env.get('commit', '?')}, sources {env.get('source_hash', '?')}",
-             f"- card: {env.get('nvidia_smi', env.get('warp_device', {}).get('name', '?'))}; Warp {env.get('warp', '?')}, "
+             f"- card: {env.get('nvidia_smi', env.get('warp_device', {}).get('name', '?'))}; "
+             f"Warp {env.get('warp', '?')}, "
              f"CUDA toolkit {env.get('cuda_toolkit_version', '-')}, driver {env.get('cuda_driver_version', '-')}",
              f"- command: `{r['command']}`", ""]
     for name, p in ph.items():
@@ -400,42 +429,34 @@ def markdown(r: dict) -> str:
         a = ph["agreement"]
         lines += ["## Agreement with the CPU", "",
                   f"{a['runs']} independent runs a side, {a['frames_per_run']} frames each, "
-                  f"{a['size']}x{a['size']}; alpha {a['alpha']} per test; a pass needs an MDB of at most 5%.", "",
-                  "| scene | method | spp | verdict | image z (R, G, B) | max tile z | MDB | CPU runs |",
-                  "|---|---|---|---|---|---|---|---|"]
-        for x in a["rows"]:
-            if "skipped" in x:
-                lines.append(f"| {x['scene']} | {x['method']} | | skipped ({x['skipped']}) | | | | |")
-            else:
-                lines.append(f"| {x['scene']} | {x['method']} | {x['spp']} | {x['verdict']} | {', '.join(f'{z:+.2f}' for z in x['image_z'])} "
-                             f"| {x['max_tile_z']} | {x['mdb_percent']}% | {x['cpu_runs']} |")
-        lines.append("")
+                  f"{a['size']}x{a['size']}; alpha {a['alpha']} per test; a pass needs an MDB of at most 5%.", ""]
+        lines += table(["scene", "method", "spp", "verdict", "image z (R, G, B)", "max tile z", "MDB", "CPU runs"],
+                       [[x["scene"], x["method"], "", f"skipped ({x['skipped']})", "", "", "", ""] if "skipped" in x
+                        else [x["scene"], x["method"], x["spp"], x["verdict"],
+                              ", ".join(f"{z:+.2f}" for z in x["image_z"]), x["max_tile_z"],
+                              f"{x['mdb_percent']}%", x["cpu_runs"]] for x in a["rows"]])
     if "rows" in ph.get("timing", {}):
         t = ph["timing"]
         lines += ["## Frame times", "", f"Median of {t['measured_frames']} frames after {t['warmup_frames']} of "
-                  "warm-up, 1 spp; ms per frame is the sum of the stages (device synchronised around each).", "",
-                  "| scene | size | method | ms/frame | x path tracer | B/px | first frame ms |", "|---|---|---|---|---|---|---|"]
-        for x in t["rows"]:
-            if "skipped" in x:
-                lines.append(f"| {x['scene']} | {x['size']} | {x['method']} | skipped | | | |")
-            else:
-                lines.append(f"| {x['scene']} | {x['size']} | {x['method']} | {x['ms_per_frame']:.2f} | "
-                             f"{x['ratio_to_pt']} | {x['bytes_per_pixel']} | {x['first_frame_ms']:.0f} |")
-        lines.append("")
+                  "warm-up, 1 spp; ms per frame is the sum of the stages (device synchronised around each).", ""]
+        lines += table(["scene", "size", "method", "ms/frame", "x path tracer", "B/px", "first frame ms"],
+                       [[x["scene"], x["size"], x["method"], "skipped", "", "", ""] if "skipped" in x
+                        else [x["scene"], x["size"], x["method"], f"{x['ms_per_frame']:.2f}", x["ratio_to_pt"],
+                              x["bytes_per_pixel"], f"{x['first_frame_ms']:.0f}"] for x in t["rows"]])
     if "counts" in ph.get("tests", {}):
         t = ph["tests"]
         lines += ["## Tests marked gpu", "", f"`{t['command']}`: {t['summary']} (exit {t['returncode']})", ""]
     e = ph.get("equal_time", {})
     if "methods" in e:
-        lines += ["## Equal time", "", f"`{e['command']}`; denoiser: {e['denoiser']}", "",
-                  "| method | frames | ms/frame | relMSE per frame | accumulated | denoised per frame | F(8) |",
-                  "|---|---|---|---|---|---|---|"]
-        for m in e["methods"]:
-            def f(v):
-                return "-" if v is None else f"{v:.4g}"
-            lines.append(f"| {m['method']} | {m['frames']} | {f(m['ms_per_frame'])} | {f(m['relmse_frame'])} | "
-                         f"{f(m['relmse_accumulated'])} | {f(m['relmse_denoised_frame'])} | {f(m['correlation_factor_8'])} |")
-        lines.append("")
+        def f(v):
+            return "-" if v is None else f"{v:.4g}"
+
+        lines += ["## Equal time", "", f"`{e['command']}`; denoiser: {e['denoiser']}", ""]
+        lines += table(["method", "frames", "ms/frame", "relMSE per frame", "accumulated", "denoised per frame",
+                        "F(8)"],
+                       [[m["method"], m["frames"], f(m["ms_per_frame"]), f(m["relmse_frame"]),
+                         f(m["relmse_accumulated"]), f(m["relmse_denoised_frame"]), f(m["correlation_factor_8"])]
+                        for m in e["methods"]])
     elif e and "returncode" in e:
         lines += ["## Equal time", "", f"`{e['command']}` exited {e['returncode']}", ""]
     return "\n".join(lines)

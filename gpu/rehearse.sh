@@ -5,8 +5,12 @@
 # time into a stash, the packages imported, and the check run from them on the CPU at toy sizes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PY312=${PY312:-$(command -v python3.12 || true)}
-[ -n "$PY312" ] || { echo "error: gpu-rehearse needs Python 3.12 (the device's): set PY312" >&2; exit 2; }
+# the device's Python: $PY312, python3.12 on the PATH, or one that pyenv installed
+for c in ${PY312:-} python3.12 $(ls -d "$(pyenv root 2>/dev/null || echo /nonexistent)"/versions/3.12*/bin/python3.12 2>/dev/null); do
+  if "$c" -c 'import sys; assert sys.version_info[:2] == (3, 12)' 2>/dev/null; then PY312=$c; break; fi
+  PY312=
+done
+[ -n "${PY312:-}" ] || { echo "error: gpu-rehearse needs Python 3.12 (the device's): set PY312" >&2; exit 2; }
 R=${REHEARSE_DIR:-/tmp/restir-rehearse}
 rm -rf "$R" && mkdir -p "$R/tree"
 git ls-files -z --cached --others --exclude-standard | xargs -0 cp --parents -t "$R/tree"

@@ -8,33 +8,7 @@ import pkgutil
 import pytest
 import warp as wp
 
-# Warp modules of the shipped kernels: a Python module's name, or the name given to @wp.kernel
-KERNEL_MODULES = [
-    "restir.integrators.path",
-    "restir.integrators.common.primary_hits",
-    "restir.integrators.common.emission_edges",
-    "restir.integrators.restir_di.s3_temporal",
-    "restir.integrators.restir_di.s4_spatial",
-    "restir.integrators.restir_di.s5_shade",
-    "restir_pt",
-    "suffix_restir",
-    "restir.aov",
-    "restir.film",
-    "restir.integrators.common.tally",
-]
-
-
-# The split-stage kernels (`stages.split`, an opt-in timing layout): the same functions as the
-# fused kernels above, which the fast tier compiles, so their own compile runs in the slow tier.
-SPLIT_MODULES = ["restir_pt_split", "restir_di_split"]
-
-
-def import_all():
-    import restir
-
-    for m in pkgutil.walk_packages(restir.__path__, "restir."):
-        if not m.name.endswith("__main__"):
-            importlib.import_module(m.name)
+from restir.kernel_modules import KERNEL_MODULES, SPLIT_MODULES, import_all
 
 
 def compile_for(module, archs, tmp_path):
@@ -44,6 +18,8 @@ def compile_for(module, archs, tmp_path):
     assert len(out) == len(archs) and all(p.exists() and p.stat().st_size > 0 for p in out)
 
 
+# The split-stage kernels compile the same functions as the fused kernels, so their own compile
+# runs in the slow tier.
 @pytest.mark.parametrize("module", KERNEL_MODULES + [pytest.param(m, marks=pytest.mark.slow) for m in SPLIT_MODULES])
 def test_compiles_for_cuda(module, tmp_path):
     compile_for(module, [90], tmp_path)
@@ -57,7 +33,7 @@ def test_compiles_for_cuda_sm86(module, tmp_path):
 
 def test_every_kernel_module_is_listed():
     """A new kernel module (a stage file with kernels, or a named Warp module) must be added to
-    KERNEL_MODULES above; fault-injected builds (made on demand) are not among the shipped ones."""
+    KERNEL_MODULES (restir/kernel_modules.py); fault-injected builds (made on demand) are not among the shipped ones."""
     import restir
 
     found = set()

@@ -17,7 +17,8 @@ from gpu.install import install
 def small_archive(path):
     raw = io.BytesIO()
     with tarfile.open(fileobj=raw, mode="w") as tar:
-        for name, data in (("site/pkg/__init__.py", b"VALUE = 42\n"), ("site/pkg/lib.so.1", random.Random(1).randbytes(5000)),
+        for name, data in (("site/pkg/__init__.py", b"VALUE = 42\n"),
+                           ("site/pkg/lib.so.1", random.Random(1).randbytes(5000)),
                            ("scenes/a/scene.xml", b"<scene/>")):
             info = tarfile.TarInfo(name)
             info.size = len(data)
