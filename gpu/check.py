@@ -225,6 +225,12 @@ class Check:
         s = self.sizes
         rows = []
         for name, spec in self._timing_scenes():
+            if self.left() < 20:
+                rows.append({"scene": name, "skipped": "budget"})
+                continue
+            t_load = time.perf_counter()
+            scene = restir.load_scene(spec)
+            load_s = round(time.perf_counter() - t_load, 2)
             for width, height in s.timing_sizes:
                 pt_ms = None
                 for method in METHODS:
@@ -233,7 +239,6 @@ class Check:
                                      "skipped": "budget"})
                         continue
                     t = time.perf_counter()
-                    scene = restir.load_scene(spec)
                     cfg = restir.RenderConfig(method=method, spp=1, width=width, height=height,
                                               device=self.args.device, max_depth=max_depth_of(method)
                                               if method == "restir-di" else None)
@@ -261,6 +266,7 @@ class Check:
                            "bytes_per_pixel": round(integ.buffers.per_pixel(integ.num_pixels)["total"], 1),
                            "stages_ms": stage_ms, "first_frame_ms": round(first_ms, 1),
                            "max_depth": integ.settings.max_depth, "tracer": integ.dscene.tracer_used,
+                           "scene_load_s": load_s,
                            "seconds": round(time.perf_counter() - t, 1)}
                     rows.append(row)
                     print(f"  {name} {width}x{height} {method}: {frame_ms:.2f} ms/frame ({row['ratio_to_pt']}x pt), "
@@ -331,7 +337,7 @@ class Check:
             rc, tail = "timeout", ""
         shutil.rmtree(self.out / "cache", ignore_errors=True)  # the reference image: not worth a file slot
         result = {"command": " ".join(["restir"] + cmd[3:]), "returncode": rc, "scene": spec,
-                  "denoiser": "OIDN on the host CPU (numpy buffers)" if denoise else "none (pyoidn not importable)"}
+                  "denoiser": "OIDN" if denoise else "none (pyoidn not importable)"}
         if rc != 0 or not out_json.exists():
             result["output_tail"] = tail
             return result
@@ -342,6 +348,7 @@ class Check:
             "correlation_factor_8": (m["metrics"].get("correlation_factor") or {}).get("8")}
             for m in data["methods"]]
         result["headline"] = data.get("headline")
+        result["denoiser"] = next((n for n in data.get("notes", []) if n.startswith("denoised by")), result["denoiser"])
         return result
 
     # ------------------------------------------------------------------ output
@@ -440,7 +447,7 @@ def markdown(r: dict) -> str:
         lines += ["## Frame times", "", f"Median of {t['measured_frames']} frames after {t['warmup_frames']} of "
                   "warm-up, 1 spp; ms per frame is the sum of the stages (device synchronised around each).", ""]
         lines += table(["scene", "size", "method", "ms/frame", "x path tracer", "B/px", "first frame ms"],
-                       [[x["scene"], x["size"], x["method"], "skipped", "", "", ""] if "skipped" in x
+                       [[x["scene"], x.get("size", ""), x.get("method", ""), "skipped", "", "", ""] if "skipped" in x
                         else [x["scene"], x["size"], x["method"], f"{x['ms_per_frame']:.2f}", x["ratio_to_pt"],
                               x["bytes_per_pixel"], f"{x['first_frame_ms']:.0f}"] for x in t["rows"]])
     if "counts" in ph.get("tests", {}):

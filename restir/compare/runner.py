@@ -401,6 +401,7 @@ def _denoise(scene, base: RenderConfig, results, reference: Reference, progress,
             m.metrics["denoised_frames"] = len(den)
             if progress:
                 progress("denoising", (i + 1) / len(results))
+        notes.append(f"denoised by Open Image Denoise on {denoiser.where}")
     except KeyboardInterrupt:
         notes.append("interrupted (Ctrl-C) while denoising: the denoised metrics are incomplete")
         return False

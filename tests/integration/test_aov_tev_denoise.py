@@ -103,5 +103,23 @@ def test_compare_denoises_the_measured_frames(tmp_path, monkeypatch):
     # OIDN on a 4-spp frame: several times lower error than the frames themselves
     assert m.metrics["relmse_denoised_frame"] < 0.5 * m.metrics["relmse_frame_subset"], m.metrics
     assert m.metrics["flip_denoised_frame"] < m.metrics["flip_frame"], m.metrics
+    assert "denoised by Open Image Denoise on the host CPU" in r.notes
     index = write_report(r, str(tmp_path / "rep"))
     assert "last frame denoised" in open(index).read() + open(tmp_path / "rep" / "data.js").read()
+
+
+def test_a_gpu_denoiser_that_fails_falls_back_to_the_host():
+    """Where the GPU path cannot run (no PyTorch with CUDA here), the denoiser says why and gives
+    the host's image, for that frame and every later one."""
+    from restir.compare.denoise import Denoiser
+
+    rng = np.random.default_rng(1)
+    albedo = rng.uniform(0.2, 0.8, (16, 16, 3)).astype(np.float32)
+    normal = np.broadcast_to(np.array([0, 0, 1], np.float32), (16, 16, 3)).copy()
+    frame = rng.exponential(0.5, (16, 16, 3)).astype(np.float32)
+    host = Denoiser(albedo, normal)(frame)
+    gpu = Denoiser(albedo, normal, device="cuda")
+    assert np.allclose(gpu(frame), host, rtol=1e-5, atol=1e-6)
+    assert gpu.device == "cpu" and gpu.fallback and gpu.where.startswith("the host CPU; the GPU was tried and failed")
+    assert np.allclose(gpu(frame), host, rtol=1e-5, atol=1e-6)
+
