@@ -2,14 +2,13 @@
 the script a lent device machine runs cannot rot between draws (gpu/check.py, docs/gpu.md)."""
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_the_gpu_check_runs_every_phase_at_toy_sizes(tmp_path):
-    p = subprocess.run([sys.executable, "gpu/check.py", "--device", "cpu", "--quick", "--out", str(tmp_path)],
+    p = subprocess.run(["make", "gpu-check", "DEVICE=cpu", "QUICK=1", f"GPU_OUT={tmp_path}"],
                        cwd=ROOT, capture_output=True, text=True, timeout=1500)
     assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
     r = json.loads((tmp_path / "gpu_check.json").read_text())
