@@ -265,11 +265,16 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
 def sized_scene(scene: Scene, config: RenderConfig) -> Scene:
     """`scene` with the film size config.width / config.height where they are given (a copy;
     the scene itself is left as it is)."""
+    from . import limits
+
     if config.width or config.height:
         scene = copy.copy(scene)
         scene.camera = copy.copy(scene.camera)
         scene.camera.width = config.width or scene.camera.width
         scene.camera.height = config.height or scene.camera.height
+    problem = limits.film_problem(scene.camera.width, scene.camera.height)
+    if problem:  # the scene's size with one side given (the other is the scene's)
+        raise ConfigError(problem)
     return scene
 
 

@@ -49,16 +49,17 @@ class RenderConfig:
     jitter: bool = True             # False: every primary ray through its pixel centre (device/camera.py)
 
     def validate(self) -> None:
-        if self.spp is not None and self.spp < 1:
-            raise ConfigError("spp must be >= 1")
-        if self.frames < 1:
-            raise ConfigError("frames must be >= 1")
-        for k in ("width", "height"):
-            v = getattr(self, k)
-            if v is not None and v < 1:
-                raise ConfigError(f"{k} must be >= 1")
-        if self.max_depth is not None and (self.max_depth == 0 or self.max_depth < -1):
-            raise ConfigError("max_depth must be -1 (unbounded) or >= 1")
+        from . import limits
+
+        problems = [limits.side_problem(k, getattr(self, k)) for k in ("width", "height")
+                    if getattr(self, k) is not None]
+        problems += [limits.spp_problem(self.spp) if self.spp is not None else None,
+                     limits.frames_problem(self.frames),
+                     limits.depth_problem(self.max_depth) if self.max_depth is not None else None,
+                     limits.finite_problem("camera_speed", self.camera_speed)]
+        problem = next((p for p in problems if p), None)
+        if problem:
+            raise ConfigError(problem)
         if self.camera_motion not in ("none", "orbit", "dolly"):
             raise ConfigError("camera_motion must be none, orbit or dolly")
         if self.tracer not in ("auto", "embree", "warp"):

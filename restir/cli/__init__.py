@@ -37,8 +37,9 @@ def main(argv=None) -> int:
         return COMMANDS[args.command].run(args)
     except (SceneError, ConfigError) as e:
         msg = e.message if isinstance(e, SceneError) else str(e)
-        loc = f"{e.loc}: " if isinstance(e, SceneError) and e.loc else ""
-        print(f"{loc}error: {msg}", file=sys.stderr)
+        # a scene's error names its file and line; any other is the command's
+        where = f"{e.loc}: " if isinstance(e, SceneError) and e.loc else f"restir {args.command}: "
+        print(f"{where}error: {msg}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -53,6 +53,20 @@ def key_value(text: str) -> tuple[str, str]:
     return k.strip(), v.strip()
 
 
+def finite_float(text: str) -> float:
+    """argparse type: a float that is finite (nan and inf are refused, with the option's name)."""
+    import argparse
+    import math
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid number: '{text}'") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, not '{text}'")
+    return v
+
+
 def fraction(text: str) -> float:
     """A bound on a relative bias: a fraction (0.05) or a percentage (5%)."""
     t = text.strip()

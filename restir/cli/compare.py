@@ -2,8 +2,8 @@
 structure (what a denoiser sees), a headline, JSON and the HTML report."""
 from ..config import ConfigError
 from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option,
-                     device_option, fanout_options, jitter_option, load_scene, open_tev, progress_bar, results_console,
-                     say, scene_argument, tev_option, write, write_json)
+                     device_option, fanout_options, finite_float, jitter_option, load_scene, open_tev, progress_bar,
+                     results_console, say, scene_argument, tev_option, write, write_json)
 
 
 def add_parser(sub) -> None:
@@ -18,7 +18,7 @@ def add_parser(sub) -> None:
                    "tracer at --reference-spp; both cached under ~/.cache/restir or $RESTIR_CACHE)")
     c.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
     budget = c.add_mutually_exclusive_group()
-    budget.add_argument("--equal-time", type=float, metavar="SECONDS",
+    budget.add_argument("--equal-time", type=finite_float, metavar="SECONDS",
                         help="every method renders frames for this wall time (compilation excluded)")
     budget.add_argument("--equal-spp", type=int, metavar="N", help="every method renders N samples per pixel")
     c.add_argument("--frames", type=int, default=16, help="frames per method when no budget is given")

@@ -6,8 +6,8 @@ import sys
 from ..config import ConfigError, RenderConfig, parse_aovs
 from ..image_io import IMAGE_FORMATS, LDR_FORMATS
 from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option,
-                     device_option, jitter_option, key_value, load_scene, open_tev, progress_bar, say, scene_argument,
-                     tev_option, write, write_json)
+                     device_option, finite_float, jitter_option, key_value, load_scene, open_tev, progress_bar, say,
+                     scene_argument, tev_option, write, write_json)
 
 
 def add_parser(sub) -> None:
@@ -30,7 +30,7 @@ def add_parser(sub) -> None:
                    help="CPU ray tracer (auto: Embree if available; CUDA always uses Warp's BVH)")
     r.add_argument("--camera-motion", default="none", choices=["none", "orbit", "dolly"],
                    help="scripted camera motion over the frames (the scene stays static)")
-    r.add_argument("--camera-speed", type=float, default=1.0,
+    r.add_argument("--camera-speed", type=finite_float, default=1.0,
                    help="orbit: degrees per frame; dolly: scene diagonals per frame")
     defines_option(r)
     r.add_argument("--set", dest="settings", action="append", type=key_value, default=[], metavar="KEY=VALUE",
@@ -40,7 +40,7 @@ def add_parser(sub) -> None:
                         "with --exposure), .npy (float32 linear, H x W x 3) (default: <scene name>.exr in the "
                         "current folder)")
     r.add_argument("--png", metavar="FILE", help="also write a tonemapped sRGB PNG (or .jpg)")
-    r.add_argument("--exposure", type=float, default=0.0, help="exposure in stops of the tonemapped images")
+    r.add_argument("--exposure", type=finite_float, default=0.0, help="exposure in stops of the tonemapped images")
     r.add_argument("--stats", metavar="FILE", help="write the stats JSON here")
     r.add_argument("--write-frames", metavar="DIR",
                    help="also write every frame's image as DIR/frame_0000.exr, frame_0001.exr, ...")

@@ -7,7 +7,8 @@ from ..config import ConfigError, RenderConfig
 from ..fanout import default_workers
 from ..image_io import IMAGE_FORMATS
 from .common import (DEFAULT_MAX_MDB, add_command, check_output, console, defines_option, device_option,
-                     fanout_options, fraction, jitter_option, key_value, load_scene, scene_argument, write)
+                     fanout_options, finite_float, fraction, jitter_option, key_value, load_scene, scene_argument,
+                     write)
 
 VERDICT_STATUS = {"pass": 0, "fail": 1, "inconclusive": 3}
 
@@ -41,7 +42,7 @@ def add_parser(sub) -> None:
                         "(0.05) or a percentage (5%%); above it the verdict is inconclusive (exit 3)")
     v.add_argument("--camera-motion", default="none", choices=["none", "orbit", "dolly"],
                    help="scripted camera motion over the frames")
-    v.add_argument("--camera-speed", type=float, default=1.0, help="orbit: degrees per frame; dolly: scene "
+    v.add_argument("--camera-speed", type=finite_float, default=1.0, help="orbit: degrees per frame; dolly: scene "
                    "diagonals per frame")
     device_option(v)
     jitter_option(v)

@@ -4,6 +4,7 @@ any work."""
 import dataclasses
 
 from ..config import ConfigError
+from ..limits import MAX_SECONDS
 
 
 @dataclasses.dataclass
@@ -64,8 +65,8 @@ class CompareConfig:
         """Refuse a comparison that cannot run, before anything renders."""
         if self.equal_time is not None and self.equal_spp is not None:
             raise ConfigError("give --equal-time or --equal-spp, not both")
-        if self.equal_time is not None and not self.equal_time > 0:
-            raise ConfigError("--equal-time must be > 0 seconds")
+        if self.equal_time is not None and not 0 < self.equal_time <= MAX_SECONDS:
+            raise ConfigError(f"--equal-time must be in (0, {MAX_SECONDS}] seconds (got {self.equal_time})")
         if self.equal_spp is not None and self.equal_spp < 1:
             raise ConfigError("--equal-spp must be >= 1")
         if self.correlation_runs != 0 and self.correlation_runs < 3:

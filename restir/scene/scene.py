@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import limits
 from . import shapes as shape_lib
 from .errors import SceneError, warn
 from .props import Props
@@ -241,8 +242,9 @@ class _Builder:
         self.max_depth = p.int("max_depth", -1)
         self.rr_depth = p.int("rr_depth", 5)
         self.hide_emitters = p.bool("hide_emitters", False)
-        if self.max_depth == 0 or self.max_depth < -1:
-            raise SceneError("max_depth must be -1 (unbounded) or >= 1", p.loc)
+        problem = limits.depth_problem(self.max_depth)
+        if problem:
+            raise SceneError(problem, p.loc)
         p.warn_unqueried()
 
     def sensor(self, obj):
@@ -269,6 +271,9 @@ class _Builder:
             elif kind == "sampler":
                 sp = self.props(child, "sampler")
                 self.spp = sp.int("sample_count", 4)
+                problem = limits.spp_problem(self.spp)
+                if problem:
+                    raise SceneError(problem.replace("spp", "sample_count", 1), sp.loc)
                 if sp.has("seed"):
                     sp.int("seed")
                 if sp.type != "independent":
@@ -288,8 +293,9 @@ class _Builder:
     def film(self, obj):
         p = self.props(obj, "film")
         w, h = p.int("width", 768), p.int("height", 576)
-        if w <= 0 or h <= 0:
-            raise SceneError("film width and height must be positive", p.loc)
+        problem = limits.film_problem(w, h)
+        if problem:
+            raise SceneError(problem, p.loc)
         for k in ("file_format", "pixel_format", "component_format"):
             if p.has(k):
                 p.string(k)

@@ -1,8 +1,11 @@
 """`make gpu-check DEVICE=cpu QUICK=1`: the GPU check's every phase at toy sizes on the CPU, so that
 the script a lent device machine runs cannot rot between draws (gpu/check.py, docs/gpu.md)."""
 import json
+import os
 import subprocess
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -27,3 +30,16 @@ def test_the_gpu_check_runs_every_phase_at_toy_sizes(tmp_path):
     md = (tmp_path / "gpu_check.md").read_text()
     assert "## Frame times" in md and "## Agreement with the CPU" in md and "## Equal time" in md
     assert len(list(tmp_path.iterdir())) <= 8  # what one device call brings back
+
+
+@pytest.mark.slow
+def test_the_bundle_installs_and_runs_the_check_as_a_device_would(tmp_path):
+    """make gpu-rehearse: the bundle's parts installed one call at a time into a fresh Python 3.12
+    with only the device image's packages, imported, and the check run from them (minutes: the
+    first bundle downloads and compresses the packages)."""
+    p = subprocess.run(["make", "gpu-rehearse"], cwd=ROOT, capture_output=True, text=True, timeout=5400,
+                       env={**os.environ, "REHEARSE_DIR": str(tmp_path / "rehearse")})
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    assert "rehearsal passed" in p.stdout
+    r = json.loads((tmp_path / "rehearse" / "out" / "gpu_check.json").read_text())
+    assert not [n for n, x in r["phases"].items() if "error" in x or "skipped" in x]

@@ -1,0 +1,77 @@
+"""Hostile input: every case gets the outcome the command line promises (README "Limits" and
+"Rendering"): a refusal before any work, as one line `file:line: error: ...` for a scene or
+`restir COMMAND: error: ...` for an argument, exit status 2 and no traceback. The scenes are kept
+in tests/data/hostile/ (its README); arguments that are hostile on their own are listed here."""
+from pathlib import Path
+
+import pytest
+
+from restir import limits
+from restir.cli import main
+
+HOSTILE = Path(__file__).resolve().parents[1] / "data" / "hostile"
+SCENE = "builtin:cornell-box"
+
+# (arguments after `restir`, the refusal's text): numbers out of range or not finite
+ARGUMENTS = [
+    (["render", SCENE, "--width", "1000000000"], "width must be in [1, 16384] pixels"),
+    (["render", SCENE, "--width", "50000", "--height", "50000"], "width must be in [1, 16384] pixels"),
+    (["render", SCENE, "--width", "16384", "--height", "16384"], "at most 67108864 pixels"),
+    (["render", SCENE, "--width", "0"], "width must be in [1, 16384] pixels"),
+    (["render", SCENE, "--spp", "1000000000000"], "spp must be in [1, 65536] per frame"),
+    (["render", SCENE, "--frames", "100000000"], "frames must be in [1, 16777216]"),
+    (["render", SCENE, "--max-depth", "1000000000"], "max_depth must be -1"),
+    (["render", SCENE, "--max-depth", "0"], "max_depth must be -1"),
+    (["render", SCENE, "--exposure", "nan"], "argument --exposure: must be a finite number"),
+    (["render", SCENE, "--exposure", "inf"], "argument --exposure: must be a finite number"),
+    (["render", SCENE, "--camera-motion", "orbit", "--camera-speed", "inf"],
+     "argument --camera-speed: must be a finite number"),
+    (["validate", SCENE, "--camera-speed", "nan"], "argument --camera-speed: must be a finite number"),
+    (["compare", SCENE, "--method", "pt", "--equal-time", "inf"], "argument --equal-time: must be a finite number"),
+    (["compare", SCENE, "--method", "pt", "--equal-time", "nan"], "argument --equal-time: must be a finite number"),
+    (["compare", SCENE, "--method", "pt", "--equal-time", "1e9"], "--equal-time must be in (0, 604800] seconds"),
+    (["compare", SCENE, "--method", "pt", "--width", "100000"], "width must be in [1, 16384] pixels"),
+]
+
+# (scene file in tests/data/hostile, line of the refused element, the refusal's text)
+SCENES = [
+    ("huge_film.xml", 3, "the film is 1000000000x8: at most 16384 pixels a side"),
+    ("huge_sample_count.xml", 3, "sample_count must be in [1, 65536] per frame"),
+    ("huge_max_depth.xml", 2, "max_depth must be -1 (unbounded, up to 1023 segments) or in [1, 1023]"),
+]
+
+
+def refusal(capsys) -> str:
+    out = capsys.readouterr()
+    assert "Traceback" not in out.err + out.out, out.err
+    lines = out.err.strip().splitlines()
+    assert len(lines) == 1, out.err
+    return lines[0]
+
+
+@pytest.mark.parametrize("args,message", ARGUMENTS, ids=[" ".join(a[2:]) or a[0] for a, _ in ARGUMENTS])
+def test_hostile_arguments_are_refused_before_any_work(args, message, tmp_path, capsys):
+    rc = main(args + (["-o", str(tmp_path / "x.exr"), "--quiet"] if args[0] == "render" else ["--quiet"]))
+    line = refusal(capsys)
+    assert rc == 2
+    assert line.startswith(f"restir {args[0]}: error: ") and message in line, line
+    assert not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.parametrize("name,line,message", SCENES)
+def test_hostile_scenes_are_refused_with_file_and_line(name, line, message, tmp_path, capsys):
+    path = HOSTILE / name
+    rc = main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--quiet"])
+    err = refusal(capsys)
+    assert rc == 2
+    assert err.startswith(f"{path}:{line}: error: ") and message in err, err
+
+
+def test_every_hostile_scene_file_is_tested():
+    assert {p.name for p in HOSTILE.glob("*.xml")} == {name for name, _, _ in SCENES}
+
+
+def test_the_depth_limit_is_the_random_number_layouts():
+    from restir.device.streams import MAX_SEGMENTS
+
+    assert limits.MAX_DEPTH == MAX_SEGMENTS
