@@ -132,6 +132,8 @@ def load_obj(path: str, loc: str) -> TriMesh:
     v, vt, vn, fv, ft, fn = arrays
     if not len(fv):
         raise SceneError(f"mesh '{path}' has no faces", loc)
+    for array, what in ((v, "v"), (vt, "vt"), (vn, "vn")):
+        check_finite_vertices(path, loc, array, what)
     pos = v[fv]
     nrm = vn[fn] if len(vn) and (fn >= 0).all() else None
     uvs = vt[ft] if len(vt) and (ft >= 0).all() else barycentric_uvs(len(fv))
@@ -228,6 +230,8 @@ def _read_obj_lines(text: str, path: str):
             continue
         key = parts[0]
         try:
+            if key in ("v", "vn") and len(parts) < 4:
+                raise SceneError(f"'{key}' needs 3 numbers: {line.strip()}", f"{path}:{lineno}")
             if key == "v":
                 v.append([float(x) for x in parts[1:4]])
             elif key == "vt":
@@ -274,9 +278,16 @@ def load_ply(path: str, loc: str) -> TriMesh:
         raise SceneError(f"cannot open mesh '{path}': {e.strerror}", loc) from None
     except Exception as e:  # plyfile raises several exception types for bad files
         raise SceneError(f"cannot parse PLY '{path}': {e}", loc) from None
+    elements = {e.name for e in ply.elements}
+    if "vertex" not in elements or "face" not in elements:
+        raise SceneError(f"PLY '{path}' has no {'vertex' if 'vertex' not in elements else 'face'} element", loc)
     vert = ply["vertex"]
     names = vert.data.dtype.names
+    if not {"x", "y", "z"} <= set(names) or not ply["face"].data.dtype.names:
+        raise SceneError(f"PLY '{path}': the vertices need x, y and z, and the faces a list of vertex indices",
+                         loc)
     v = np.stack([vert["x"], vert["y"], vert["z"]], 1).astype(np.float64)
+    check_finite_vertices(path, loc, v, "vertex")
     lists = ply["face"].data[ply["face"].data.dtype.names[0]]
     if lists.dtype != object:  # the triangles' array (the known-length read)
         f = np.array(lists, np.int64).reshape(-1, 3)
@@ -286,15 +297,32 @@ def load_ply(path: str, loc: str) -> TriMesh:
             for k in range(1, len(face) - 1):
                 faces.append([face[0], face[k], face[k + 1]])
         f = np.array(faces, np.int64).reshape(-1, 3)
+    if len(f) == 0:
+        raise SceneError(f"mesh '{path}' has no faces", loc)
+    if f.min() < 0 or f.max() >= len(v):
+        bad = int(f[(f < 0) | (f >= len(v))][0])
+        raise SceneError(f"PLY '{path}': a face refers to vertex {bad}, but there are {len(v)} vertices", loc)
     n = np.stack([vert["nx"], vert["ny"], vert["nz"]], 1) if "nx" in names else None
     uv = None
     for a, b in (("u", "v"), ("s", "t"), ("texture_u", "texture_v")):
         if a in names:
             uv = np.stack([vert[a], vert[b]], 1)
+    for array, what in ((n, "normal"), (uv, "texture coordinate")):
+        if array is not None:
+            check_finite_vertices(path, loc, np.asarray(array, np.float64), what)
     mesh = _from_indexed(v, f, n, uv)
     if mesh.normals is None:
         mesh.normals = smooth_normals(v, f)
     return mesh
+
+
+def check_finite_vertices(path: str, loc: str, v: np.ndarray, what: str) -> None:
+    """Refuse a mesh with a non-finite vertex (a triangle through it would vanish from the image
+    without a word)."""
+    bad = ~np.isfinite(v).all(axis=1) if len(v) else np.zeros(0, bool)
+    if bad.any():
+        raise SceneError(f"mesh '{path}': {what} {int(np.argmax(bad)) + 1} of {len(v)} has a non-finite "
+                         f"coordinate {v[np.argmax(bad)].tolist()}", loc)
 
 
 def smooth_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:

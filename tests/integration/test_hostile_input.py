@@ -33,11 +33,17 @@ ARGUMENTS = [
     (["compare", SCENE, "--method", "pt", "--width", "100000"], "width must be in [1, 16384] pixels"),
 ]
 
-# (scene file in tests/data/hostile, line of the refused element, the refusal's text)
+# (scene file in tests/data/hostile, the file and line the refusal names, the refusal's text)
 SCENES = [
-    ("huge_film.xml", 3, "the film is 1000000000x8: at most 16384 pixels a side"),
-    ("huge_sample_count.xml", 3, "sample_count must be in [1, 65536] per frame"),
-    ("huge_max_depth.xml", 2, "max_depth must be -1 (unbounded, up to 1023 segments) or in [1, 1023]"),
+    ("huge_film.xml", "huge_film.xml:3", "the film is 1000000000x8: at most 16384 pixels a side"),
+    ("huge_sample_count.xml", "huge_sample_count.xml:3", "sample_count must be in [1, 65536] per frame"),
+    ("huge_max_depth.xml", "huge_max_depth.xml:2", "max_depth must be -1 (unbounded, up to 1023 segments)"),
+    ("obj_two_coordinates.xml", "obj_two_coordinates.obj:3", "'v' needs 3 numbers: v 0 1"),
+    ("obj_nan_vertex.xml", "obj_nan_vertex.xml:5", "v 3 of 3 has a non-finite coordinate"),
+    ("ply_index_out_of_range.xml", "ply_index_out_of_range.xml:5", "a face refers to vertex 999999, but there are 3"),
+    ("ply_negative_index.xml", "ply_negative_index.xml:5", "a face refers to vertex -5, but there are 3 vertices"),
+    ("ply_no_faces.xml", "ply_no_faces.xml:5", "has no face element"),
+    ("ply_nan_vertex.xml", "ply_nan_vertex.xml:5", "vertex 2 of 3 has a non-finite coordinate"),
 ]
 
 
@@ -58,13 +64,13 @@ def test_hostile_arguments_are_refused_before_any_work(args, message, tmp_path, 
     assert not (tmp_path / "x.exr").exists()
 
 
-@pytest.mark.parametrize("name,line,message", SCENES)
-def test_hostile_scenes_are_refused_with_file_and_line(name, line, message, tmp_path, capsys):
+@pytest.mark.parametrize("name,where,message", SCENES)
+def test_hostile_scenes_are_refused_with_file_and_line(name, where, message, tmp_path, capsys):
     path = HOSTILE / name
     rc = main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--quiet"])
     err = refusal(capsys)
     assert rc == 2
-    assert err.startswith(f"{path}:{line}: error: ") and message in err, err
+    assert err.startswith(f"{HOSTILE / where}: error: ") and message in err, err
 
 
 def test_every_hostile_scene_file_is_tested():
