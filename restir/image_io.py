@@ -142,9 +142,29 @@ def read_hdr(path: str) -> np.ndarray:
     return (rgbe[..., :3] * scale[..., None]).astype(np.float32)
 
 
+class ImageError(ValueError):
+    """A file that cannot be read as an RGB image; the message says why (no library's exception
+    type reaches the caller)."""
+
+
 def read_image(path: str, linearize_srgb: bool = True) -> np.ndarray:
     """Any EXR, Radiance .hdr, .pfm, a .npy array (linear, H x W x 3), or an 8-bit image
-    (sRGB-decoded unless linearize_srgb is False), as float RGB."""
+    (sRGB-decoded unless linearize_srgb is False), as float32 RGB (H, W, 3) with at least one
+    pixel. Anything else raises ImageError."""
+    try:
+        img = np.asarray(_read_any(path, linearize_srgb))
+    except Exception as e:  # the image libraries raise many types for unreadable files
+        raise ImageError(f"not a readable image ({type(e).__name__}: {e})") from None
+    if img.dtype.kind not in "fiu":
+        raise ImageError(f"holds {img.dtype} values, not numbers")
+    if img.ndim != 3 or img.shape[2] < 3:
+        raise ImageError(f"has the shape {img.shape}, not height x width x 3 (RGB)")
+    if img.shape[0] == 0 or img.shape[1] == 0:
+        raise ImageError(f"has no pixels ({img.shape[1]}x{img.shape[0]})")
+    return np.asarray(img[..., :3], np.float32)
+
+
+def _read_any(path: str, linearize_srgb: bool) -> np.ndarray:
     lower = path.lower()
     if lower.endswith(".exr"):
         return read_exr(path)

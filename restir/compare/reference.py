@@ -60,7 +60,12 @@ def load_reference_file(path: str, width: int, height: int) -> Reference:
 
     if not os.path.isfile(path):
         raise ConfigError(f"--reference {path}: no such file")
-    image = np.asarray(read_image(path), np.float64)[..., :3]
+    try:
+        image = np.asarray(read_image(path), np.float64)
+    except ValueError as e:  # ImageError: unreadable, empty, or not RGB
+        raise ConfigError(f"--reference {path}: {e}") from None
+    if not np.isfinite(image).all():
+        raise ConfigError(f"--reference {path}: {int((~np.isfinite(image)).any(-1).sum())} pixels are NaN or inf")
     if image.shape[:2] != (height, width):
         raise ConfigError(f"--reference {path}: {image.shape[1]}x{image.shape[0]} pixels, the comparison renders "
                           f"{width}x{height} (set --width/--height to the reference's size)")

@@ -44,6 +44,18 @@ SCENES = [
     ("ply_negative_index.xml", "ply_negative_index.xml:5", "a face refers to vertex -5, but there are 3 vertices"),
     ("ply_no_faces.xml", "ply_no_faces.xml:5", "has no face element"),
     ("ply_nan_vertex.xml", "ply_nan_vertex.xml:5", "vertex 2 of 3 has a non-finite coordinate"),
+    ("bitmap_empty_pfm.xml", "bitmap_empty_pfm.xml:6", "cannot read image 'empty_texture.pfm': has no pixels (0x0)"),
+    ("bitmap_empty_hdr.xml", "bitmap_empty_hdr.xml:6", "cannot read image 'empty_texture.hdr': has no pixels (0x0)"),
+]
+
+# (reference image in tests/data/hostile for restir compare --reference, the refusal's text)
+REFERENCES = [
+    ("reference_text.png", "not a readable image (UnidentifiedImageError"),
+    ("reference_empty.npy", "not a readable image (EOFError"),
+    ("reference_object.npy", "not a readable image (ValueError: Object arrays cannot be loaded"),
+    ("reference_garbage.exr", "not a readable image (RuntimeError"),
+    ("reference_nan.npy", "64 pixels are NaN or inf"),
+    ("reference_gray.npy", "has the shape (8, 8), not height x width x 3 (RGB)"),
 ]
 
 
@@ -73,8 +85,18 @@ def test_hostile_scenes_are_refused_with_file_and_line(name, where, message, tmp
     assert err.startswith(f"{HOSTILE / where}: error: ") and message in err, err
 
 
-def test_every_hostile_scene_file_is_tested():
+@pytest.mark.parametrize("name,message", REFERENCES)
+def test_hostile_reference_images_are_refused(name, message, capsys):
+    rc = main(["compare", SCENE, "--method", "pt", "--width", "8", "--height", "8", "--frames", "2",
+               "--reference", str(HOSTILE / name), "--quiet"])
+    line = refusal(capsys)
+    assert rc == 2
+    assert line.startswith(f"restir compare: error: --reference {HOSTILE / name}: ") and message in line, line
+
+
+def test_every_hostile_file_is_tested():
     assert {p.name for p in HOSTILE.glob("*.xml")} == {name for name, _, _ in SCENES}
+    assert {p.name for p in HOSTILE.glob("reference_*")} == {name for name, _ in REFERENCES}
 
 
 def test_the_depth_limit_is_the_random_number_layouts():
