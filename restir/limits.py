@@ -11,6 +11,8 @@ MAX_SPP = 65536                 # samples per pixel per frame
 MAX_FRAMES = 1 << 24
 MAX_DEPTH = 1023                # the longest path a sample's random numbers are laid out for (device/streams.py)
 MAX_SECONDS = 7 * 24 * 3600     # a time budget (restir compare --equal-time)
+MAX_SCENE_FILE_BYTES = 256 << 20  # a scene's XML file (its meshes and images are files of their own)
+MAX_XML_DEPTH = 64              # elements nested in a scene file (Mitsuba's scenes nest 4 or 5 deep)
 
 
 def film_problem(width: int, height: int) -> str | None:

@@ -2,6 +2,7 @@
 "Rendering"): a refusal before any work, as one line `file:line: error: ...` for a scene or
 `restir COMMAND: error: ...` for an argument, exit status 2 and no traceback. The scenes are kept
 in tests/data/hostile/ (its README); arguments that are hostile on their own are listed here."""
+import os
 from pathlib import Path
 
 import pytest
@@ -44,6 +45,7 @@ SCENES = [
     ("ply_negative_index.xml", "ply_negative_index.xml:5", "a face refers to vertex -5, but there are 3 vertices"),
     ("ply_no_faces.xml", "ply_no_faces.xml:5", "has no face element"),
     ("ply_nan_vertex.xml", "ply_nan_vertex.xml:5", "vertex 2 of 3 has a non-finite coordinate"),
+    ("nested_shapes.xml", "nested_shapes.xml:1", "elements nested more than 64 deep"),
     ("bitmap_empty_pfm.xml", "bitmap_empty_pfm.xml:6", "cannot read image 'empty_texture.pfm': has no pixels (0x0)"),
     ("bitmap_empty_hdr.xml", "bitmap_empty_hdr.xml:6", "cannot read image 'empty_texture.hdr': has no pixels (0x0)"),
 ]
@@ -83,6 +85,22 @@ def test_hostile_scenes_are_refused_with_file_and_line(name, where, message, tmp
     err = refusal(capsys)
     assert rc == 2
     assert err.startswith(f"{HOSTILE / where}: error: ") and message in err, err
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "folder", "huge"])
+def test_scene_files_that_are_not_files_are_refused_before_reading(kind, tmp_path, capsys):
+    """/dev/zero would be read without end, a FIFO would block the open, a 300 MiB file (sparse
+    here) would be read whole: each is refused from its stat."""
+    path = {"device": Path("/dev/zero"), "folder": tmp_path}.get(kind, tmp_path / "scene.xml")
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "huge":
+        with open(path, "wb") as f:
+            f.truncate(300 << 20)
+    rc = main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--quiet"])
+    line = refusal(capsys)
+    assert rc == 2 and line.startswith(f"{path}: error: ")
+    assert ("at most 256 MiB" if kind == "huge" else "not a regular file") in line, line
 
 
 @pytest.mark.parametrize("name,message", REFERENCES)
