@@ -576,6 +576,11 @@ class _Builder:
         p = self.props(obj, "shape")
         t = p.type
         to_world = p.transform("to_world")
+        linear = to_world[:3, :3]
+        if abs(np.linalg.det(linear)) <= 1e-12 * np.prod(np.linalg.norm(linear, axis=0)) or not linear.any():
+            # a zero scale (or a rank-deficient matrix) has no inverse for the normals
+            raise SceneError("the shape's to_world is singular (a scale of 0 on some axis?): it has no normals",
+                             p.loc)
         if t == "sphere":
             center = p.vec3("center", np.zeros(3))
             radius = p.float("radius", 1.0)

@@ -46,6 +46,8 @@ SCENES = [
     ("ply_no_faces.xml", "ply_no_faces.xml:5", "has no face element"),
     ("ply_nan_vertex.xml", "ply_nan_vertex.xml:5", "vertex 2 of 3 has a non-finite coordinate"),
     ("nested_shapes.xml", "nested_shapes.xml:1", "elements nested more than 64 deep"),
+    ("shape_zero_scale.xml", "shape_zero_scale.xml:5", "the shape's to_world is singular"),
+    ("shape_zero_matrix.xml", "shape_zero_matrix.xml:5", "the shape's to_world is singular"),
     ("bitmap_empty_pfm.xml", "bitmap_empty_pfm.xml:6", "cannot read image 'empty_texture.pfm': has no pixels (0x0)"),
     ("bitmap_empty_hdr.xml", "bitmap_empty_hdr.xml:6", "cannot read image 'empty_texture.hdr': has no pixels (0x0)"),
 ]
