@@ -531,6 +531,8 @@ class _Builder:
             m.textures[param] = self.texture(v)
             setattr(m, param, np.ones(3))
             return self.textures[m.textures[param]].mean()
+        if np.any(v < 0):  # no surface reflects a negative amount of light
+            raise SceneError(f"parameter '{name}' must be non-negative", p._loc_of(name))
         setattr(m, param, v)
         return float(np.mean(v))
 
@@ -662,7 +664,10 @@ class _Builder:
             raise SceneError("only one environment emitter is supported", p.loc)
         rot = p.transform("to_world")[:3, :3]
         if p.type == "constant":
-            self.env = ("constant", p.rgb("radiance", np.ones(3)), rot, None)
+            radiance = p.rgb("radiance", np.ones(3))
+            if np.any(radiance < 0):
+                raise SceneError("radiance must be non-negative", p._loc_of("radiance"))
+            self.env = ("constant", radiance, rot, None)
         else:
             fname = p.string("filename")
             path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
@@ -671,7 +676,10 @@ class _Builder:
             img = _read_image(path, fname, p.loc, linearize_srgb=True)
             if img.shape[0] < 3 or img.shape[1] < 2:
                 raise SceneError(f"environment map '{fname}' must be at least 2x3 pixels", p.loc)
-            self.env = ("envmap", np.full(3, p.float("scale", 1.0)), rot, img)
+            scale = p.float("scale", 1.0)
+            if scale < 0:
+                raise SceneError("scale must be non-negative", p._loc_of("scale"))
+            self.env = ("envmap", np.full(3, scale), rot, img)
         p.warn_unqueried()
 
 

@@ -48,6 +48,9 @@ SCENES = [
     ("nested_shapes.xml", "nested_shapes.xml:1", "elements nested more than 64 deep"),
     ("shape_zero_scale.xml", "shape_zero_scale.xml:5", "the shape's to_world is singular"),
     ("shape_zero_matrix.xml", "shape_zero_matrix.xml:5", "the shape's to_world is singular"),
+    ("constant_negative_radiance.xml", "constant_negative_radiance.xml:6", "radiance must be non-negative"),
+    ("diffuse_negative_reflectance.xml", "diffuse_negative_reflectance.xml:6",
+     "parameter 'reflectance' must be non-negative"),
     ("bitmap_empty_pfm.xml", "bitmap_empty_pfm.xml:6", "cannot read image 'empty_texture.pfm': has no pixels (0x0)"),
     ("bitmap_empty_hdr.xml", "bitmap_empty_hdr.xml:6", "cannot read image 'empty_texture.hdr': has no pixels (0x0)"),
 ]
