@@ -3,6 +3,7 @@
 Output formats follow the file's extension (`IMAGE_FORMATS`); `write_image` refuses others.
 """
 import os
+import tempfile
 
 import numpy as np
 
@@ -19,8 +20,21 @@ def write_exr(path: str, rgb: np.ndarray, layers: dict | None = None) -> None:
         for c, suffix in enumerate(suffixes):
             channels[f"{name}.{suffix}"] = np.ascontiguousarray(np.asarray(image)[..., c], dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, channels) as f:
-        f.write(path)
+    # OpenEXR does not report a failed write (a full disk): the file is made in a folder of its own,
+    # checked, and copied to `path` with Python's I/O, which raises OSError on any failure.
+    with tempfile.TemporaryDirectory() as folder:
+        tmp = os.path.join(folder, "image.exr")
+        with OpenEXR.File(header, channels) as f:
+            f.write(tmp)
+        try:
+            with OpenEXR.File(tmp) as check:
+                check.channels()
+        except Exception as e:  # noqa: BLE001  (whatever OpenEXR raises for a truncated file)
+            raise OSError(f"the EXR could not be written ({e})") from None
+        with open(tmp, "rb") as f:
+            data = f.read()
+    with open(path, "wb") as out:
+        out.write(data)
 
 
 def read_exr_layers(path: str) -> dict:

@@ -108,6 +108,17 @@ def test_scene_files_that_are_not_files_are_refused_before_reading(kind, tmp_pat
     assert ("at most 256 MiB" if kind == "huge" else "not a regular file") in line, line
 
 
+@pytest.mark.parametrize("ext", ["exr", "png", "npy"])
+def test_a_write_that_fails_is_an_error_not_a_success(ext, tmp_path, capsys):
+    """A full disk (an output linked to /dev/full): OpenEXR's writer says nothing of it, so the
+    EXR is checked and copied with Python's I/O; every format ends in one line and exit 2."""
+    out = tmp_path / f"full.{ext}"
+    out.symlink_to("/dev/full")
+    rc = main(["render", SCENE, "--width", "8", "--height", "8", "--spp", "1", "-o", str(out), "--quiet"])
+    line = refusal(capsys)
+    assert rc == 2 and line == f"restir render: error: cannot write {out}: No space left on device", line
+
+
 @pytest.mark.parametrize("name,message", REFERENCES)
 def test_hostile_reference_images_are_refused(name, message, capsys):
     rc = main(["compare", SCENE, "--method", "pt", "--width", "8", "--height", "8", "--frames", "2",
