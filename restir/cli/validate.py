@@ -50,8 +50,12 @@ def add_parser(sub) -> None:
     fanout_options(v, "the independent runs")
 
 
-def _glob_images(pattern: str, option: str) -> list:
+def _glob_images(pattern: str, option: str, seen: dict | None = None) -> list:
+    """The images the pattern matches, sorted by name. With `seen` ({digest: where}, shared by the
+    calls for the runs and the reference), an image identical to one read before is refused:
+    independent runs are never identical, and copies of one run would pass with no variance."""
     import glob
+    import hashlib
 
     from ..image_io import read_image
 
@@ -64,6 +68,12 @@ def _glob_images(pattern: str, option: str) -> list:
             images.append(read_image(p))
         except Exception as e:  # unreadable or not an image: name the file
             raise ConfigError(f"{option}: cannot read {p}: {e}") from None
+        if seen is not None:
+            digest = hashlib.sha256(images[-1].tobytes()).hexdigest()
+            if digest in seen:
+                raise ConfigError(f"{option} {p} is the same image as {seen[digest]}: independent runs (and a "
+                                  "reference) are never identical")
+            seen[digest] = f"{option} {p}"
     return images
 
 
@@ -92,11 +102,12 @@ def _validate_images(args) -> int:
         check_output(args.zmap, "--zmap", tuple(IMAGE_FORMATS))
     if args.reference_variance and not args.reference:
         raise ConfigError("--reference-variance needs --reference")
-    images = _glob_images(args.images, "--images")
+    seen: dict = {}
+    images = _glob_images(args.images, "--images", seen)
     if len(images) < 2:
         raise ConfigError(f"--images {args.images}: {len(images)} file; at least 2 independent runs are needed")
     if args.reference:
-        refs = _glob_images(args.reference, "--reference")
+        refs = _glob_images(args.reference, "--reference", seen)
         if len(refs) >= 2:
             if args.reference_variance:
                 raise ConfigError("--reference-variance goes with one converged --reference image, not several runs")

@@ -119,6 +119,21 @@ def test_a_write_that_fails_is_an_error_not_a_success(ext, tmp_path, capsys):
     assert rc == 2 and line == f"restir render: error: cannot write {out}: No space left on device", line
 
 
+def test_copies_of_one_run_are_not_independent_runs(tmp_path, capsys):
+    """validate --images with four copies of one image (and that image as the reference) said
+    "pass, MDB 0.00%": zero variance is no evidence. Refused, naming the two files."""
+    import numpy as np
+
+    image = np.random.default_rng(0).random((8, 8, 3)).astype(np.float32)
+    for k in range(4):
+        np.save(tmp_path / f"run{k}.npy", image)
+    rc = main(["validate", "--images", str(tmp_path / "run*.npy"), "--reference", str(tmp_path / "run0.npy")])
+    line = refusal(capsys)
+    assert rc == 2
+    assert line == (f"restir validate: error: --images {tmp_path / 'run1.npy'} is the same image as --images "
+                    f"{tmp_path / 'run0.npy'}: independent runs (and a reference) are never identical")
+
+
 @pytest.mark.parametrize("name,message", REFERENCES)
 def test_hostile_reference_images_are_refused(name, message, capsys):
     rc = main(["compare", SCENE, "--method", "pt", "--width", "8", "--height", "8", "--frames", "2",
