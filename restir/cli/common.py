@@ -53,6 +53,16 @@ def key_value(text: str) -> tuple[str, str]:
     return k.strip(), v.strip()
 
 
+def path_argument(text: str) -> str:
+    """argparse type of a file or folder argument: an empty one is refused (`-o ""` would
+    otherwise mean the default path)."""
+    import argparse
+
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path")
+    return text
+
+
 def finite_float(text: str) -> float:
     """argparse type: a float that is finite (nan and inf are refused, with the option's name)."""
     import argparse

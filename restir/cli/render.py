@@ -5,8 +5,8 @@ import sys
 
 from ..config import ConfigError, RenderConfig, parse_aovs
 from ..image_io import IMAGE_FORMATS, LDR_FORMATS
-from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option,
-                     device_option, finite_float, jitter_option, key_value, load_scene, open_tev, progress_bar, say,
+from .common import (add_command, check_output, check_output_folder, close_tev, console, defines_option, device_option,
+                     finite_float, jitter_option, key_value, load_scene, open_tev, path_argument, progress_bar, say,
                      scene_argument, tev_option, write, write_json)
 
 
@@ -35,14 +35,14 @@ def add_parser(sub) -> None:
     defines_option(r)
     r.add_argument("--set", dest="settings", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="method setting, e.g. strategy=nee")
-    r.add_argument("-o", "--output", metavar="FILE",
+    r.add_argument("-o", "--output", metavar="FILE", type=path_argument,
                    help="the image, format by extension: .exr (linear float), .png or .jpg (tonemapped sRGB, "
                         "with --exposure), .npy (float32 linear, H x W x 3) (default: <scene name>.exr in the "
                         "current folder)")
-    r.add_argument("--png", metavar="FILE", help="also write a tonemapped sRGB PNG (or .jpg)")
+    r.add_argument("--png", metavar="FILE", type=path_argument, help="also write a tonemapped sRGB PNG (or .jpg)")
     r.add_argument("--exposure", type=finite_float, default=0.0, help="exposure in stops of the tonemapped images")
-    r.add_argument("--stats", metavar="FILE", help="write the stats JSON here")
-    r.add_argument("--write-frames", metavar="DIR",
+    r.add_argument("--stats", metavar="FILE", type=path_argument, help="write the stats JSON here")
+    r.add_argument("--write-frames", metavar="DIR", type=path_argument,
                    help="also write every frame's image as DIR/frame_0000.exr, frame_0001.exr, ...")
     r.add_argument("--quiet", action="store_true", help="no progress bar, timing table or notes")
     r.add_argument("--aov", metavar="NAMES", help="also write these layers into the EXR: albedo, normal (comma-"

@@ -32,6 +32,9 @@ ARGUMENTS = [
     (["compare", SCENE, "--method", "pt", "--equal-time", "nan"], "argument --equal-time: must be a finite number"),
     (["compare", SCENE, "--method", "pt", "--equal-time", "1e9"], "--equal-time must be in (0, 604800] seconds"),
     (["compare", SCENE, "--method", "pt", "--width", "100000"], "width must be in [1, 16384] pixels"),
+    (["render", SCENE, "--png", ""], "argument --png: an empty path"),
+    (["compare", SCENE, "--method", "pt", "--json", " "], "argument --json: an empty path"),
+    (["validate", "--images", ""], "argument --images: an empty path"),
 ]
 
 # (scene file in tests/data/hostile, the file and line the refusal names, the refusal's text)
@@ -72,6 +75,14 @@ def refusal(capsys) -> str:
     lines = out.err.strip().splitlines()
     assert len(lines) == 1, out.err
     return lines[0]
+
+
+def test_an_empty_output_path_is_refused(tmp_path, capsys, monkeypatch):
+    """-o "" wrote ./<scene>.exr in silence."""
+    monkeypatch.chdir(tmp_path)
+    rc = main(["render", SCENE, "-o", "", "--quiet"])
+    assert rc == 2 and refusal(capsys).startswith("restir render: error: argument -o/--output: an empty path")
+    assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("args,message", ARGUMENTS, ids=[" ".join(a[2:]) or a[0] for a, _ in ARGUMENTS])
