@@ -194,7 +194,8 @@ def write_json(path: str, data: dict) -> None:
 
 # ------------------------------------------------------------------ console, progress, scene, tev
 def console(quiet: bool = False):
-    """The console of notes, warnings and progress: stderr, silent with --quiet."""
+    """The console of notes, warnings and progress: stderr, silent with --quiet (load_scene says
+    the scene's warnings all the same)."""
     from rich.console import Console
 
     return Console(stderr=True, quiet=quiet)
@@ -268,8 +269,8 @@ def load_scene(spec: str, defines, con, missing_textures: str = "error"):
     if seconds > _LoadProgress.SHOW_AFTER:
         say(con, f"loaded {spec} in {seconds:.1f} s ({scene.num_triangles:,} triangles)")
     for w in caught:
-        if issubclass(w.category, SceneWarning):
-            say(con, str(w.message), "[yellow]warning:[/] ")
+        if issubclass(w.category, SceneWarning):  # said even with --quiet: a warning is not a note
+            say(console() if con.quiet else con, str(w.message), "[yellow]warning:[/] ")
         else:
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     return scene

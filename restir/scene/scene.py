@@ -653,6 +653,9 @@ class _Builder:
         keep = area > 0
         pos, nrm, uvs = pos[keep], nrm[keep], uvs[keep]
         p.warn_unqueried()
+        if not len(pos):  # legal (Mitsuba renders it as nothing) but surely not what was meant
+            what = "an emitter" if np.any(emission > 0) else "a shape"
+            warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)
         if len(pos):
             self.parts.append((pos, nrm, uvs, smooth, mat, emission))
 

@@ -77,6 +77,15 @@ def refusal(capsys) -> str:
     return lines[0]
 
 
+def test_an_emitter_of_zero_area_is_a_warning_and_the_image_is_rendered(tmp_path, capsys):
+    """Legal (Mitsuba renders it as nothing), but surely not meant: said, even with --quiet."""
+    path = HOSTILE / "emitter_zero_area.xml"
+    rc = main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--spp", "2", "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 0 and (tmp_path / "x.exr").exists()
+    assert err == f"warning: {path}:7: an emitter whose every triangle has zero area: it is left out of the image\n"
+
+
 def test_an_empty_output_path_is_refused(tmp_path, capsys, monkeypatch):
     """-o "" wrote ./<scene>.exr in silence."""
     monkeypatch.chdir(tmp_path)
@@ -155,7 +164,7 @@ def test_hostile_reference_images_are_refused(name, message, capsys):
 
 
 def test_every_hostile_file_is_tested():
-    assert {p.name for p in HOSTILE.glob("*.xml")} == {name for name, _, _ in SCENES}
+    assert {p.name for p in HOSTILE.glob("*.xml")} == {name for name, _, _ in SCENES} | {"emitter_zero_area.xml"}
     assert {p.name for p in HOSTILE.glob("reference_*")} == {name for name, _ in REFERENCES}
 
 
