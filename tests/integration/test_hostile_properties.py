@@ -4,6 +4,7 @@ wrote by hand, asserting only the contract. A scene either loads or is refused w
 with exit status 2, and never a traceback. A fixed budget of examples per test keeps this in the
 fast tier (RESTIR_HYPOTHESIS_EXAMPLES=N runs N instead: 1500 scene documents and 600 argument
 lists passed); the examples are derandomized, so a run is repeatable and a failure reproduces."""
+import os
 import string
 
 import pytest
@@ -15,8 +16,8 @@ from restir.cli import main
 from restir.config import ConfigError
 from restir.scene.errors import SceneError
 
-BUDGET = settings(max_examples=int(__import__("os").environ.get("RESTIR_HYPOTHESIS_EXAMPLES", "60")), deadline=None, derandomize=True,
-                  suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+BUDGET = settings(max_examples=int(os.environ.get("RESTIR_HYPOTHESIS_EXAMPLES", "60")), deadline=None,
+                  derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 # ------------------------------------------------------------------ scene documents
 NUMBERS = st.one_of(st.sampled_from(["0", "-1", "1e308", "-1e308", "nan", "inf", "-inf", "1e-320", "", " ", "1,2",
