@@ -7,6 +7,7 @@ Arguments are parsed into the API's configs; user errors print one line (`file:l
 traceback. Output paths are checked before any work is done.
 """
 import sys
+import warnings
 
 from ..config import ConfigError
 from ..scene.errors import SceneError
@@ -34,7 +35,11 @@ def main(argv=None) -> int:
     except SystemExit as e:  # --help, --version (0) and one-line argument errors (2)
         return e.code if isinstance(e.code, int) else 0 if e.code is None else 2
     try:
-        return COMMANDS[args.command].run(args)
+        # numpy's and scipy's RuntimeWarnings (a division by a zero variance, say) are for
+        # developers: they printed a source line of a library; what a user needs is in the results
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return COMMANDS[args.command].run(args)
     except (SceneError, ConfigError) as e:
         msg = e.message if isinstance(e, SceneError) else str(e)
         # a scene's error names its file and line; any other is the command's
