@@ -163,8 +163,8 @@ _CUDA_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
 
 
 class RenderInterrupted(KeyboardInterrupt):
-    """Ctrl-C stopped a render between frames. `result` holds the average of the frames that
-    finished (stats["interrupted"] is True), or None when none had."""
+    """Ctrl-C stopped a render (the frame in flight at its next launch, dropped). `result` holds
+    the average of the frames that finished (stats["interrupted"] is True), or None when none had."""
 
     def __init__(self, result):
         super().__init__("render interrupted")
@@ -326,10 +326,16 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_c
         done = 0
         if progress:
             integ.on_samples = lambda n, spp: progress(done + n / spp, config.frames)
+        from .integrators.base import FrameInterrupted
+
+        integ.stop_requested = lambda: bool(stop)
         for f in range(config.frames):
             if stop:
                 break
-            mean, var = integ.render_frame(f)
+            try:
+                mean, var = integ.render_frame(f)
+            except FrameInterrupted:
+                break
             moments.add(mean, var, spp)
             m = mean.astype(np.float64)
             frame_sums += (m, m ** 2, m ** 3, m ** 4)
@@ -338,7 +344,7 @@ def render(scene: Scene, config: RenderConfig | None = None, progress=None, on_c
             done += 1
             if progress:
                 progress(f + 1, config.frames)
-    stopped = bool(stop) and done < config.frames  # a Ctrl-C during the last frame stops nothing
+    stopped = bool(stop) and done < config.frames  # a Ctrl-C after the last frame's last launch stops nothing
     if stopped and done == 0:
         raise RenderInterrupted(None)
     total_ms = (time.perf_counter() - t0) * 1e3

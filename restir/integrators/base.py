@@ -30,6 +30,11 @@ from .common.tally import TALLY_KERNELS, EventTally
 COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
 
 
+
+
+class FrameInterrupted(Exception):
+    """A stop was asked for (Ctrl-C) while a frame rendered: the frame is dropped, unfinished."""
+
 class Integrator:
     """Base class. Subclasses list STAGES and implement `render_sample` as a table of contents."""
 
@@ -73,6 +78,7 @@ class Integrator:
         self.counters: dict[str, int] = {}  # NaN/inf and other events that must be seen, never hidden
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
         self.on_samples = None  # progress hook within a frame: on_samples(samples_done, spp), if set
+        self.stop_requested = None  # if set, a callable: True drops the frame in flight (FrameInterrupted)
         self.events = self.buffer("events", EventCounts)  # per-stage scratch, summed into the tally
         self.tally = EventTally(self.device)  # the events' sums on the device, read once per frame
         self._film = None
@@ -159,6 +165,8 @@ class Integrator:
             self.render_samples(frame, begin, end, camera)
             if self.on_samples is not None:
                 self.on_samples(end, spp)
+            if self.stop_requested is not None and end < spp and self.stop_requested():
+                raise FrameInterrupted(frame)
         self.collect_events()
         return self.frame_moments()
 

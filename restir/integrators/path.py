@@ -41,6 +41,8 @@ from .common.events import EventCounts, output_events, packed_events, ray_events
 from .common.emission_edges import VARIED, edge_choice, edge_launch, edge_record, emission_sum, seen
 from .common.primary_hits import emission_rays, emission_seen, lattice_emission
 
+SAMPLES_PER_LAUNCH = 1 << 21  # pixel samples in one launch of a frame that can be stopped (sample_batches)
+
 STRATEGIES = {"mis": STRATEGY_MIS, "nee": STRATEGY_NEE, "bsdf": STRATEGY_BSDF}
 
 
@@ -259,9 +261,13 @@ class PathTracer(Integrator):
 
     # The kernel averages a frame's samples itself (Welford in frame_mean, frame_m2): one launch
     # per frame, or with a progress hook a few launches over consecutive samples (the same numbers
-    # in the same order, so the same image) so that long frames show progress.
+    # in the same order, so the same image but for emission.adaptive's records, which each launch
+    # renews) so that long frames show progress; and when a stop can be asked for (Ctrl-C), at
+    # most SAMPLES_PER_LAUNCH pixel samples a launch, so that it is honoured within about a second.
     def sample_batches(self, spp: int) -> list:
         parts = min(spp, 8) if self.on_samples is not None else 1
+        if self.stop_requested is not None:
+            parts = min(spp, max(parts, -(-spp * self.num_pixels // SAMPLES_PER_LAUNCH)))
         bounds = [spp * i // parts for i in range(parts + 1)]
         return list(zip(bounds[:-1], bounds[1:]))
 

@@ -59,3 +59,22 @@ def test_ctrl_c_during_compare_keeps_what_finished(tmp_path):
     assert data["methods"][0]["seconds"] >= 20 and data["methods"][1]["frames"] >= 1
     assert "restir-di stopped after" in data["notes"][-1]
     assert (tmp_path / "rep" / "index.html").is_file()
+
+
+def test_ctrl_c_stops_a_long_frame_at_its_next_launch(tmp_path):
+    """One frame of 65536 spp (minutes on 2 cores): Ctrl-C drops it at its next launch (the path
+    tracer's launches are at most 2^21 pixel samples) instead of being ignored until it ends; no
+    frame finished, so nothing is written, and the exit status is 130."""
+    out = tmp_path / "x.npy"
+    cmd = [sys.executable, "-m", "restir", "render", "builtin:cornell-box", "--width", "64", "--height", "64",
+           "--spp", "65536", "--quiet", "-o", str(out)]
+    env = dict(os.environ, RESTIR_CPU_THREADS="2")
+    subprocess.run(cmd[:-2] + ["--spp", "1", "-o", str(tmp_path / "warm.npy")], check=True, capture_output=True,
+                   env=env)  # the kernels compiled, so the interrupt lands while the frame renders
+    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    time.sleep(5.0)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)  # the whole frame would take minutes
+    assert p.returncode == 130, (p.returncode, err)
+    assert err.strip() == "interrupted before the first frame finished: nothing written", err
+    assert not out.exists()
