@@ -78,3 +78,18 @@ def test_ctrl_c_stops_a_long_frame_at_its_next_launch(tmp_path):
     assert p.returncode == 130, (p.returncode, err)
     assert err.strip() == "interrupted before the first frame finished: nothing written", err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("after_s", [0.1, 0.3, 0.6])
+def test_ctrl_c_while_the_command_starts_is_a_clean_stop(after_s, tmp_path):
+    """A Ctrl-C while Python imports the package and Warp (the first second) ended in a
+    KeyboardInterrupt traceback: the `restir` command's entry point (restir_cli.py) catches it."""
+    command = os.path.join(os.path.dirname(sys.executable), "restir")
+    p = subprocess.Popen([command, "render", "builtin:cornell-box", "--width", "16", "--height", "16",
+                          "--frames", "100000", "-o", str(tmp_path / "x.npy"), "--quiet"],
+                         stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    time.sleep(after_s)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130 and "Traceback" not in err, (p.returncode, err)
+    assert "interrupted" in err, err
