@@ -256,7 +256,14 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
         dscene = DeviceScene(scene, config.device, config.tracer, config.jitter)
     except RuntimeError as e:
         raise ConfigError(str(e)) from None
-    integ = cls(dscene, settings, config.device, config.slices, on_compile=on_compile)
+    try:
+        integ = cls(dscene, settings, config.device, config.slices, on_compile=on_compile)
+    except (MemoryError, RuntimeError) as e:
+        if isinstance(e, RuntimeError) and "allocate" not in str(e).lower():
+            raise
+        cam = scene.camera
+        raise ConfigError(f"not enough memory on {config.device} for the buffers of {config.method} at "
+                          f"{cam.width}x{cam.height}: a smaller film, or another device") from None
     integ.reverse_launch = config.debug_reverse_launch
     integ.notes.extend(notes)
     return integ

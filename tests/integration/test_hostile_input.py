@@ -7,8 +7,10 @@ from pathlib import Path
 
 import pytest
 
+import restir
 from restir import limits
 from restir.cli import main
+from restir.config import ConfigError
 
 HOSTILE = Path(__file__).resolve().parents[1] / "data" / "hostile"
 SCENE = "builtin:cornell-box"
@@ -99,6 +101,20 @@ def test_numpys_runtime_warnings_do_not_reach_the_user():
               "raise SystemExit(cli.main(['info']))\n")
     p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and "RuntimeWarning" not in p.stderr, p.stderr
+
+
+def test_a_film_the_device_cannot_hold_is_a_config_error(monkeypatch):
+    """A film within the limits can still exceed the memory (Suffix ReSTIR at 8192x8192 needs
+    27 GB): Warp's allocation failure becomes ConfigError (the command's one line), not a
+    RuntimeError traceback."""
+    from restir.integrators.base import Integrator
+
+    def buffer(self, name, dtype, shape=None):  # every method's buffers are made here
+        raise RuntimeError("Failed to allocate 27000000000 bytes on device 'cpu'")
+
+    monkeypatch.setattr(Integrator, "buffer", buffer)
+    with pytest.raises(ConfigError, match="not enough memory on cpu for the buffers of pt at 8x8"):
+        restir.render(restir.load_scene(SCENE), width=8, height=8, spp=1)
 
 
 def test_an_empty_output_path_is_refused(tmp_path, capsys, monkeypatch):
