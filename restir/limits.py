@@ -11,6 +11,7 @@ MAX_SPP = 65536                 # samples per pixel per frame
 MAX_FRAMES = 1 << 24
 MAX_DEPTH = 1023                # the longest path a sample's random numbers are laid out for (device/streams.py)
 MAX_SECONDS = 7 * 24 * 3600     # a time budget (restir compare --equal-time)
+MAX_RUNS = 1 << 16              # independent runs (validate --runs, sweep --seeds, compare --correlation-runs)
 MAX_SCENE_FILE_BYTES = 256 << 20  # a scene's XML file (its meshes and images are files of their own)
 MAX_XML_DEPTH = 64              # elements nested in a scene file (Mitsuba's scenes nest 4 or 5 deep)
 
@@ -42,6 +43,12 @@ def spp_problem(spp: int) -> str | None:
 def frames_problem(frames: int) -> str | None:
     if not 1 <= frames <= MAX_FRAMES:
         return f"frames must be in [1, {MAX_FRAMES}] (got {frames})"
+    return None
+
+
+def runs_problem(option: str, runs: int, least: int) -> str | None:
+    if not least <= runs <= MAX_RUNS:
+        return f"{option} must be in [{least}, {MAX_RUNS}] (got {runs})"
     return None
 
 

@@ -3,6 +3,7 @@ or images from any renderer tested against reference images or runs."""
 import os
 import sys
 
+from .. import limits
 from ..config import ConfigError, RenderConfig
 from ..fanout import default_workers
 from ..image_io import IMAGE_FORMATS
@@ -150,8 +151,9 @@ def run(args) -> int:
         raise ConfigError("give a SCENE to render, or --images to test")
 
     for option, n in (("--runs", args.runs), ("--ref-runs", args.ref_runs)):
-        if n is not None and n < 2:
-            raise ConfigError(f"{option} {n}: at least 2 independent runs are needed")
+        problem = limits.runs_problem(option, n, 2) if n is not None else None
+        if problem:
+            raise ConfigError(problem + ": at least 2 independent runs are needed" if n < 2 else problem)
     if args.zmap:
         check_output(args.zmap, "--zmap", tuple(IMAGE_FORMATS))
     scene = load_scene(args.scene, args.defines, console(), args.missing_textures)

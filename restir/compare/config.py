@@ -4,7 +4,7 @@ any work."""
 import dataclasses
 
 from ..config import ConfigError
-from ..limits import MAX_SECONDS
+from ..limits import MAX_RUNS, MAX_SECONDS
 
 
 @dataclasses.dataclass
@@ -69,6 +69,8 @@ class CompareConfig:
             raise ConfigError(f"--equal-time must be in (0, {MAX_SECONDS}] seconds (got {self.equal_time})")
         if self.equal_spp is not None and self.equal_spp < 1:
             raise ConfigError("--equal-spp must be >= 1")
+        if self.correlation_runs > MAX_RUNS:
+            raise ConfigError(f"--correlation-runs must be at most {MAX_RUNS} (got {self.correlation_runs})")
         if self.correlation_runs != 0 and self.correlation_runs < 3:
             raise ConfigError(f"--correlation-runs {self.correlation_runs}: the radial correlation needs at least 3 "
                               "independent runs (0: none)")

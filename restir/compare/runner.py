@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from ..config import ConfigError, RenderConfig
+from ..limits import MAX_FRAMES
 from . import metrics
 from . import structure
 from .config import CompareConfig
@@ -269,7 +270,8 @@ def compare(scene, methods, config: CompareConfig | None = None, *, progress=Non
             notes.append(f"every method and the reference at max_depth {depth}, the only depth of "
                          + ", ".join(s.label for s in specs if METHODS[s.method].FIXED_MAX_DEPTH is not None))
         max_depth = depth
-    base = RenderConfig(frames=10 ** 9 if c.equal_time is not None else c.frames, width=c.width, height=c.height,
+    # at equal time the budget ends the frames; their count only has to be within the limits
+    base = RenderConfig(frames=MAX_FRAMES if c.equal_time is not None else c.frames, width=c.width, height=c.height,
                         max_depth=max_depth, seed=c.seed, device=c.device, jitter=c.jitter)
     base.validate()
     check_device(base)

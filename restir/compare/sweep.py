@@ -13,6 +13,7 @@ import os
 
 import numpy as np
 
+from .. import limits
 from ..config import ConfigError, RenderConfig
 from .frames import FrameStats
 from .runner import Comparison, measure
@@ -79,6 +80,9 @@ def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: in
     points = grid if grid and isinstance(grid[0], dict) else parse_grid(grid or [], method)
     if seeds < 1 or frames < 1 or spp < 1:
         raise ConfigError("seeds, frames and spp must be >= 1")
+    problem = limits.runs_problem("--seeds", seeds, 1)
+    if problem:
+        raise ConfigError(problem)
     base = RenderConfig(method=method, frames=frames, spp=spp, width=width, height=height, max_depth=max_depth,
                         device=device, keep_frames=True, jitter=jitter)
     base.validate()

@@ -34,6 +34,10 @@ ARGUMENTS = [
     (["compare", SCENE, "--method", "pt", "--equal-time", "nan"], "argument --equal-time: must be a finite number"),
     (["compare", SCENE, "--method", "pt", "--equal-time", "1e9"], "--equal-time must be in (0, 604800] seconds"),
     (["compare", SCENE, "--method", "pt", "--width", "100000"], "width must be in [1, 16384] pixels"),
+    (["validate", SCENE, "--runs", "1000000000000"], "--runs must be in [2, 65536]"),
+    (["validate", SCENE, "--ref-runs", "1"], "--ref-runs must be in [2, 65536] (got 1): at least 2"),
+    (["sweep", SCENE, "--method", "pt", "--seeds", "1000000000"], "--seeds must be in [1, 65536]"),
+    (["compare", SCENE, "--method", "pt", "--correlation-runs", "10000000"], "--correlation-runs must be at most"),
     (["render", SCENE, "--png", ""], "argument --png: an empty path"),
     (["compare", SCENE, "--method", "pt", "--json", " "], "argument --json: an empty path"),
     (["validate", "--images", ""], "argument --images: an empty path"),
@@ -127,7 +131,8 @@ def test_an_empty_output_path_is_refused(tmp_path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("args,message", ARGUMENTS, ids=[" ".join(a[2:]) or a[0] for a, _ in ARGUMENTS])
 def test_hostile_arguments_are_refused_before_any_work(args, message, tmp_path, capsys):
-    rc = main(args + (["-o", str(tmp_path / "x.exr"), "--quiet"] if args[0] == "render" else ["--quiet"]))
+    extra = {"render": ["-o", str(tmp_path / "x.exr"), "--quiet"], "compare": ["--quiet"], "sweep": ["--quiet"]}
+    rc = main(args + extra.get(args[0], []))
     line = refusal(capsys)
     assert rc == 2
     assert line.startswith(f"restir {args[0]}: error: ") and message in line, line
