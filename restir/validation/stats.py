@@ -109,6 +109,7 @@ class ZTestReport:
         otherwise pixels are assumed independent and their variances are summed."""
         mean = np.asarray(mean, np.float64)
         var = np.asarray(var, np.float64)
+        tile = max(1, min(tile, *mean.shape[:2]))  # an image smaller than a tile is one tile
         ref = np.broadcast_to(np.asarray(ref, np.float64), mean.shape)
         ref_var = np.broadcast_to(np.asarray(ref_var, np.float64), mean.shape)
         v = var + ref_var

@@ -121,6 +121,15 @@ def test_a_film_the_device_cannot_hold_is_a_config_error(monkeypatch):
         restir.render(restir.load_scene(SCENE), width=8, height=8, spp=1)
 
 
+def test_a_film_smaller_than_a_tile_is_compared(tmp_path, monkeypatch, capsys):
+    """compare at 4x4 pixels (the z-tests' tiles are 8 px) raised numpy's ValueError; found by
+    test_hostile_properties.py. The image is then one tile."""
+    monkeypatch.setenv("RESTIR_CACHE", str(tmp_path))
+    rc = main(["compare", SCENE, "--method", "pt", "--frames", "2", "--warmup", "0", "--reference-spp", "4",
+               "--width", "4", "--height", "4", "--correlation-runs", "0", "--quiet"])
+    assert rc == 0 and "Traceback" not in capsys.readouterr().err
+
+
 def test_an_empty_output_path_is_refused(tmp_path, capsys, monkeypatch):
     """-o "" wrote ./<scene>.exr in silence."""
     monkeypatch.chdir(tmp_path)

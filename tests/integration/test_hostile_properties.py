@@ -103,3 +103,48 @@ def test_the_api_raises_its_own_error_for_hostile_numbers(field, value):
     """The Python API: ConfigError, never numpy's or Warp's exceptions, before any allocation."""
     with pytest.raises(ConfigError):
         restir.render(restir.load_scene("builtin:cornell-box"), **{"width": 4, "height": 4, "spp": 1, field: value})
+
+
+# The other commands, each at toy sizes unless a generated option says otherwise (with a value
+# that is invalid or small): (command's arguments, its options)
+COMMANDS = {
+    "compare": (["compare", "builtin:cornell-box", "--method", "pt", "--frames", "2", "--warmup", "0",
+                 "--reference-spp", "4", "--width", "4", "--height", "4", "--correlation-runs", "0", "--quiet"],
+                st.one_of(st.tuples(st.sampled_from(["--frames", "--warmup", "--reference-spp", "--width",
+                                                     "--correlation-runs", "--equal-spp", "--seed"]), HOSTILE_INTS),
+                          st.tuples(st.just("--equal-time"), HOSTILE_FLOATS),
+                          st.tuples(st.just("--method"), st.sampled_from(["restir-pt", "pt:spp=2", "pt:spp=x",
+                                                                          "nope", ":", "pt:"])))),
+    "validate": (["validate", "builtin:cornell-box", "--method", "pt", "--runs", "2", "--frames", "2", "--width", "4",
+                  "--height", "4", "--ref-spp", "1"],
+                 st.one_of(st.tuples(st.sampled_from(["--runs", "--ref-runs", "--frames", "--spp", "--width",
+                                                      "--ref-spp"]), HOSTILE_INTS),
+                           st.tuples(st.just("--max-mdb"), st.sampled_from(["0.05", "5%", "-1", "nan", "200%", "x"])),
+                           st.tuples(st.just("--camera-speed"), HOSTILE_FLOATS))),
+    "sweep": (["sweep", "builtin:cornell-box", "--method", "pt", "--frames", "2", "--warmup", "0", "--reference-spp",
+               "4", "--width", "4", "--height", "4", "--quiet"],
+              st.one_of(st.tuples(st.sampled_from(["--seeds", "--frames", "--spp", "--warmup", "--height"]),
+                                  HOSTILE_INTS),
+                        st.tuples(st.just("--grid"), st.sampled_from(["spp=1,2", "strategy=nee,bsdf", "nope=1",
+                                                                      "spp=", "=1", "spp=nan"])))),
+}
+
+
+@settings(BUDGET, max_examples=max(1, BUDGET.max_examples // 4))
+@given(st.sampled_from(sorted(COMMANDS)).flatmap(
+    lambda name: st.tuples(st.just(name), st.lists(COMMANDS[name][1], max_size=3))))
+def test_generated_arguments_of_every_command_run_or_are_refused_in_one_line(tmp_path_factory, capsys, monkeypatch,
+                                                                            case):
+    name, options = case
+    folder = tmp_path_factory.mktemp(name)
+    monkeypatch.setenv("RESTIR_CACHE", str(folder / "cache"))
+    args = list(COMMANDS[name][0]) + (["--out", str(folder / "sweep")] if name == "sweep" else [])
+    for option, value in options:
+        args += [option, value]
+    rc = main(args)
+    out = capsys.readouterr()
+    assert "Traceback" not in out.err + out.out, out.err
+    assert rc in (0, 1, 2, 3), (args, rc, out.err)  # validate: 1 fail, 3 inconclusive
+    if rc == 2:
+        errors = [line for line in out.err.splitlines() if ": error: " in line]
+        assert len(errors) == 1, (args, out.err)
