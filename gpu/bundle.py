@@ -11,12 +11,13 @@ This script:
 2. unpacks them into one site folder (what `pip install --target` makes of these wheels), less
    Warp's tests and examples and OIDN's libraries for AMD and Intel GPUs; files that are copies
    of one another (a library under its three names) become links;
-3. adds the scenes the check renders (veach-ajar, staircase2 from ../shared/scenes), the shipped
+3. adds the scenes the check renders (veach-ajar, staircase2, and veach-bidir for a test, from
+   ../shared/scenes), the shipped
    kernels compiled for sm_90 in a Warp kernel cache, and the CPU side of the check's agreement
    phase (compiled and rendered here: the device's minutes are scarcer);
-4. packs it all as one .tar.xz, and splits that into parts that each fit in one call beside the
-   working tree: .gpu-bundle/part1/, part2/, ... each with the manifest (sizes, SHA-256s,
-   commit, the commands to run).
+4. packs the packages as one .tar.xz and the rest as another, and splits them into parts that
+   each fit in one call beside the working tree: .gpu-bundle/part1/, part2/, ... each with the
+   manifest (sizes, SHA-256s, commit, the commands to run).
 
 gpu/install.py unpacks it on the device, part by part. The wheels are cached in
 .gpu-bundle/wheels and the packed site in .gpu-bundle/cache (keyed by the wheels), so that a
@@ -52,7 +53,7 @@ PLATFORMS = ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x
 # Intel (SYCL, Level Zero) devices and their loaders (about 45 MB).
 DROP = ("warp/tests/", "warp/examples/", "libOpenImageDenoise_device_hip", "libOpenImageDenoise_device_sycl",
         "libsycl.so", "libur_", "libumf.so")
-SCENES = ("veach-ajar", "staircase2")
+SCENES = ("veach-ajar", "staircase2", "veach-bidir")  # the check's timing and equal time; a Jacobian test
 
 
 def tree_bytes() -> int:

@@ -302,8 +302,9 @@ class Check:
         except ImportError:
             pass
         timeout = max(10.0, self.left() - self.args.reserve)
+        env = dict(os.environ, **({"RESTIR_SCENES": self.args.scenes} if self.args.scenes else {}))
         try:
-            p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout)
+            p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout, env=env)
             output, rc = p.stdout + p.stderr, p.returncode
         except subprocess.TimeoutExpired as e:
             output = (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
