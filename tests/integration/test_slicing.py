@@ -25,6 +25,15 @@ CONFIGS = [
     ("restir-pt", "builtin:indirect-room", 4,
      {"spatial.rounds": 1, "spatial.reciprocal": False, "direct": "restir-di"}),
     ("suffix-restir", "builtin:indirect-room", 4, {"suffix.spatial.rounds": 2, "gather.suffixes": 3}),
+    # the methods' settings are run-time parameters of the same kernels: other branches of them
+    ("pt", "builtin:cornell-box-glossy", 4, {"strategy": "nee", "nee.samples": 2, "rr": True, "emission.rays": 4}),
+    ("restir-di", "builtin:cornell-box-glossy", 2, {"temporal": False, "candidates.bsdf": 2, "spatial.rounds": 0}),
+    ("restir-pt", "builtin:cornell-box-glossy", 4, {"shift": "replay", "mcmc.steps": 1, "shade.expected": True}),
+    ("restir-pt", "builtin:indirect-room", 4, {"shift": "reconnection", "direct": "nee", "temporal": False}),
+    ("suffix-restir", "builtin:cornell-box-glossy", 4, {"gather.mis": "pairwise", "gather.search": "hashgrid",
+                                                        "direct": "restir-di"}),
+    ("suffix-restir", "builtin:indirect-room", 4, {"gather.search": "bvh", "gather.canonical_per_prefix": True,
+                                                   "shift": "replay"}),
     pytest.param("restir-pt", "builtin:indirect-room", 4, {"stages.split": True}, marks=pytest.mark.slow),
     pytest.param("restir-di", "builtin:cornell-box-glossy", 2, {"stages.split": True}, marks=pytest.mark.slow),
 ]
