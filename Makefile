@@ -35,11 +35,12 @@ test: $(STAMP) browser
 test-slow: $(STAMP) browser test-debug
 	$(VENV)/bin/pytest -q -m slow
 
-# The shipped kernels under Warp's debug mode: every array access bounds-checked (an access out of
-# bounds aborts with the kernel's source line; on a GPU it would read another buffer or crash).
-# The slicing and determinism tests launch every pixel stage of every method; DEBUG_TESTS= runs
-# the whole fast tier so.
-DEBUG_TESTS ?= tests/integration/test_slicing.py tests/integration/test_determinism.py
+# The kernels under Warp's debug mode: every array access bounds-checked (an access out of bounds
+# aborts with the kernel's source line; on a GPU it would read another buffer or crash). The unit
+# tests' kernels, and every pixel stage of every method (the slicing and determinism tests, with
+# settings that take the kernels' other branches); DEBUG_TESTS=tests runs the whole fast tier so.
+DEBUG_TESTS ?= tests/unit tests/integration/test_slicing.py tests/integration/test_determinism.py \
+	tests/integration/test_path_tracer.py
 test-debug: $(STAMP)
 	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile $(DEBUG_TESTS)
 
