@@ -39,10 +39,13 @@ test-slow: $(STAMP) browser test-debug
 # aborts with the kernel's source line; on a GPU it would read another buffer or crash). The unit
 # tests' kernels, and every pixel stage of every method (the slicing and determinism tests, with
 # settings that take the kernels' other branches); DEBUG_TESTS=tests runs the whole fast tier so.
+# (Not the CUDA compile test: NVRTC's debug builds of the two largest modules take many minutes,
+# and the device check loads release builds.)
 DEBUG_TESTS ?= tests/unit tests/integration/test_slicing.py tests/integration/test_determinism.py \
 	tests/integration/test_path_tracer.py
 test-debug: $(STAMP)
-	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile $(DEBUG_TESTS)
+	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile --ignore=tests/unit/test_cuda_compile.py \
+		$(DEBUG_TESTS)
 
 # The GPU check (docs/gpu.md): on a device machine it runs as `python3 gpu/check.py`; here
 # `make gpu-check DEVICE=cpu QUICK=1` runs the same phases at toy sizes.
