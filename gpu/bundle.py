@@ -237,8 +237,8 @@ def commands(parts: list[Path], scenes: bool, kernels: bool = True) -> list[dict
         cmd = f"python3 gpu/install.py {rel}"
         if i == len(parts) - 1:
             cache = f"WARP_CACHE_PATH={STASH}/kernels " if kernels else ""
-            cmd += (f" && {cache}PYTHONPATH={STASH}/site PYTHONUNBUFFERED=1 python3 gpu/check.py --device cuda --out $OUT"
-                    f"{f' --scenes {STASH}/scenes' if scenes else ''} --cpu-runs {STASH}/cpu_runs.npz")
+            cmd += (f" && {cache}PYTHONPATH={STASH}/site PYTHONUNBUFFERED=1 python3 gpu/check.py --device cuda"
+                    f" --out $OUT{f' --scenes {STASH}/scenes' if scenes else ''} --cpu-runs {STASH}/cpu_runs.npz")
         calls.append({"carry": [rel], "command": cmd, "timeout_s": 600 if i == len(parts) - 1 else 120})
     return calls
 
