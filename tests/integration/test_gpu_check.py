@@ -21,6 +21,7 @@ def test_the_gpu_check_runs_every_phase_at_toy_sizes(tmp_path):
     assert ph["environment"]["warp"] and ph["environment"]["warp_device"]["name"]
     rows = ph["agreement"]["rows"]
     assert len(rows) == 8 and all(x["verdict"] in ("pass", "inconclusive") for x in rows)  # toy sizes: weak tests
+    assert all(x["agreement"].startswith(("agree", "too weak")) for x in rows)
     timing = ph["timing"]["rows"]
     assert {x["method"] for x in timing} == {"pt", "restir-di", "restir-pt", "suffix-restir"}
     assert all(x["ms_per_frame"] > 0 and x["bytes_per_pixel"] > 0 and x["stages_ms"] for x in timing)
