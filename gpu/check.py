@@ -91,16 +91,18 @@ def source_hash() -> str:
 
 
 def commit() -> str:
-    """The commit checked: RESTIR_COMMIT, the bundle's manifest, or git (the device has no .git)."""
+    """The commit checked: RESTIR_COMMIT, git, or (on the device, which has no .git) the bundle's
+    manifest."""
     if os.environ.get("RESTIR_COMMIT"):
         return os.environ["RESTIR_COMMIT"]
-    for manifest in sorted(ROOT.glob(".gpu-bundle/*/manifest.json")):
-        return json.loads(manifest.read_text()).get("commit", "unknown")
     try:
         return subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True,
                               check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+        pass
+    for manifest in sorted(ROOT.glob(".gpu-bundle/*/manifest.json")):
+        return json.loads(manifest.read_text()).get("commit", "unknown")
+    return "unknown"
 
 
 class Check:
