@@ -165,18 +165,12 @@ class Check:
                 env["precompiled_kernels"] = precompiled(d)
             except Exception as e:  # a diagnostic: the check goes on without it
                 env["precompiled_kernels"] = f"not determined ({type(e).__name__}: {e})"
-        try:
-            import pyoidn  # noqa: F401
-
-            env["oidn"] = "pyoidn importable"
-        except Exception as e:
-            env["oidn"] = f"not available ({type(e).__name__})"
+        env["oidn"] = "pyoidn importable" if _has_oidn() else "pyoidn not importable"
         return env
 
     def agreement(self) -> dict:
-        import restir
         from restir.validation.check import compare
-        from restir.validation.runs import ImageBatches, IndependentRuns, Validation
+        from restir.validation.runs import ImageBatches, Validation
 
         s = self.sizes
         cpu_runs = self._cpu_runs()
@@ -192,11 +186,8 @@ class Check:
                 if ref_images is None:
                     ref_images = render_runs(method, spec, s, "cpu", seed0=900_000)
                 t = time.perf_counter()
-                scene = restir.load_scene(spec, width=s.agreement_size, height=s.agreement_size)
-                cfg = restir.RenderConfig(method=method, spp=spp_of(method, s), frames=s.agreement_frames,
-                                          device=self.args.device, max_depth=max_depth_of(method))
-                tested = IndependentRuns(scene, cfg, s.agreement_runs, seed0=1000)
-                ref = ImageBatches(ref_images)
+                tested = ImageBatches(list(render_runs(method, spec, s, self.args.device, seed0=1000)))
+                ref = ImageBatches(list(ref_images))
                 rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=8, alpha=1e-3)
                 v = Validation(rep, tested, ref)
                 rows.append({"scene": spec, "method": method, "spp": spp_of(method, s),

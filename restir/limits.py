@@ -1,5 +1,5 @@
 """The largest inputs restir accepts, each refused with a one-line error before any work is done
-(README "Limits"): a film, sample count or path depth beyond them would exhaust the device's
+(docs/limits.md): a film, sample count or path depth beyond them would exhaust the device's
 memory, overflow the kernels' 32-bit indices or run for days, and a number that is not finite
 has no meaning anywhere. The scene loader (with the file and line) and the API's configs (the
 command line's arguments) ask the same questions here."""
@@ -34,9 +34,9 @@ def side_problem(name: str, pixels: int) -> str | None:
     return None
 
 
-def spp_problem(spp: int) -> str | None:
+def spp_problem(spp: int, name: str = "spp") -> str | None:
     if not 1 <= spp <= MAX_SPP:
-        return f"spp must be in [1, {MAX_SPP}] per frame (got {spp}); more frames give more samples"
+        return f"{name} must be in [1, {MAX_SPP}] per frame (got {spp}); more frames give more samples"
     return None
 
 

@@ -56,8 +56,6 @@ def key_value(text: str) -> tuple[str, str]:
 def path_argument(text: str) -> str:
     """argparse type of a file or folder argument: an empty one is refused (`-o ""` would
     otherwise mean the default path)."""
-    import argparse
-
     if not text.strip():
         raise argparse.ArgumentTypeError("an empty path")
     return text
@@ -65,9 +63,6 @@ def path_argument(text: str) -> str:
 
 def finite_float(text: str) -> float:
     """argparse type: a float that is finite (nan and inf are refused, with the option's name)."""
-    import argparse
-    import math
-
     try:
         v = float(text)
     except ValueError:

@@ -13,7 +13,8 @@ def add_parser(sub) -> None:
     c.add_argument("--method", dest="methods", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="a method to compare, with its settings (spp=N: samples per pixel per frame); repeat "
                         "for each method, e.g. --method pt --method 'restir-di:spatial.neighbors=8'")
-    c.add_argument("--reference", metavar="FILE", type=path_argument, help="reference image (.exr, .npy, .png) of the compared size, or "
+    c.add_argument("--reference", metavar="FILE", type=path_argument,
+                   help="reference image (.exr, .npy, .png) of the compared size, or "
                    "'mitsuba': Mitsuba 3 at --reference-spp on the same XML (restir[reference]) (default: the path "
                    "tracer at --reference-spp; both cached under ~/.cache/restir or $RESTIR_CACHE)")
     c.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
@@ -31,7 +32,8 @@ def add_parser(sub) -> None:
     defines_option(c)
     device_option(c)
     jitter_option(c)
-    c.add_argument("--report", metavar="DIR", type=path_argument, help="write the HTML report (opens offline) into this folder")
+    c.add_argument("--report", metavar="DIR", type=path_argument,
+                   help="write the HTML report (opens offline) into this folder")
     c.add_argument("--json", metavar="FILE", type=path_argument, help="write the metrics, timings and stats as JSON")
     c.add_argument("--quiet", action="store_true", help="no progress display")
     fanout_options(c, "the correlation runs, and the methods at equal samples or frames (equal time renders them "

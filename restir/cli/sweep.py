@@ -17,7 +17,8 @@ def add_parser(sub) -> None:
     s.add_argument("--frames", type=int, default=16, help="frames per render")
     s.add_argument("--spp", type=int, default=1, help="samples per pixel per frame (unless on the grid)")
     s.add_argument("--warmup", type=int, default=4, help="frames before the per-frame error is measured")
-    s.add_argument("--reference", metavar="FILE", type=path_argument, help="reference image (default: the path tracer at "
+    s.add_argument("--reference", metavar="FILE", type=path_argument,
+                   help="reference image (default: the path tracer at "
                    "--reference-spp, cached)")
     s.add_argument("--reference-spp", type=int, default=1024, help="spp of the path-traced reference")
     s.add_argument("--width", type=int, help="image width (default: the scene's)")
@@ -26,7 +27,8 @@ def add_parser(sub) -> None:
     defines_option(s)
     device_option(s)
     jitter_option(s)
-    s.add_argument("--out", default="out/sweep", metavar="DIR", type=path_argument, help="writes DIR/sweep.json, DIR/sweep.csv and "
+    s.add_argument("--out", default="out/sweep", metavar="DIR", type=path_argument,
+                   help="writes DIR/sweep.json, DIR/sweep.csv and "
                    "the report DIR/report/index.html")
     s.add_argument("--quiet", action="store_true", help="no progress display")
     fanout_options(s, "the renders")

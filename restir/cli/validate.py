@@ -18,12 +18,15 @@ def add_parser(sub) -> None:
     scene_argument(v, nargs="?", help="Mitsuba 3 XML file or builtin:NAME (listed below); not needed when "
                    "--images are tested against --reference images")
     v.add_argument("--method", default="restir-di", help="the method tested")
-    v.add_argument("--images", metavar="GLOB", type=path_argument, help="test these images instead of rendering: K >= 2 independent runs "
+    v.add_argument("--images", metavar="GLOB", type=path_argument,
+                   help="test these images instead of rendering: K >= 2 independent runs "
                    "of any renderer (quote the pattern, e.g. 'runs/*.exr'), against --reference, or against the "
                    "path tracer rendered here on SCENE (--ref-runs runs of --frames x --ref-spp at the images' size)")
-    v.add_argument("--reference", metavar="GLOB", type=path_argument, help="with --images: K' >= 2 independent reference runs, or one "
+    v.add_argument("--reference", metavar="GLOB", type=path_argument,
+                   help="with --images: K' >= 2 independent reference runs, or one "
                    "converged image (taken as exact unless --reference-variance is given)")
-    v.add_argument("--reference-variance", metavar="FILE", type=path_argument, help="with one --reference image: the per-pixel variance "
+    v.add_argument("--reference-variance", metavar="FILE", type=path_argument,
+                   help="with one --reference image: the per-pixel variance "
                    "of its mean, an image of the same size")
     v.add_argument("--runs", type=int, default=32, help="independent runs K (fresh seed and history each)")
     v.add_argument("--frames", type=int, default=8, help="frames T per run; a run's statistic is its average")
@@ -46,7 +49,8 @@ def add_parser(sub) -> None:
                    "diagonals per frame")
     device_option(v)
     jitter_option(v)
-    v.add_argument("--zmap", metavar="FILE", type=path_argument, help="write the per-pixel z map here (.png, .exr, .npy)")
+    v.add_argument("--zmap", metavar="FILE", type=path_argument,
+                   help="write the per-pixel z map here (.png, .exr, .npy)")
     fanout_options(v, "the independent runs")
 
 

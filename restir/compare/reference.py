@@ -56,13 +56,13 @@ def cache_folder() -> str:
 
 
 def load_reference_file(path: str, width: int, height: int) -> Reference:
-    from ..image_io import read_image
+    from ..image_io import ImageError, read_image
 
     if not os.path.isfile(path):
         raise ConfigError(f"--reference {path}: no such file")
     try:
         image = np.asarray(read_image(path), np.float64)
-    except ValueError as e:  # ImageError: unreadable, empty, or not RGB
+    except ImageError as e:  # unreadable, empty, or not RGB
         raise ConfigError(f"--reference {path}: {e}") from None
     if not np.isfinite(image).all():
         raise ConfigError(f"--reference {path}: {int((~np.isfinite(image)).any(-1).sum())} pixels are NaN or inf")

@@ -30,10 +30,9 @@ from .common.tally import TALLY_KERNELS, EventTally
 COMPILE_NOTICE_S = 1.0  # loading cached kernels takes well under this; compiling takes 5-20 s
 
 
-
-
 class FrameInterrupted(Exception):
     """A stop was asked for (Ctrl-C) while a frame rendered: the frame is dropped, unfinished."""
+
 
 class Integrator:
     """Base class. Subclasses list STAGES and implement `render_sample` as a table of contents."""

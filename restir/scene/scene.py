@@ -271,9 +271,9 @@ class _Builder:
             elif kind == "sampler":
                 sp = self.props(child, "sampler")
                 self.spp = sp.int("sample_count", 4)
-                problem = limits.spp_problem(self.spp)
+                problem = limits.spp_problem(self.spp, "sample_count")
                 if problem:
-                    raise SceneError(problem.replace("spp", "sample_count", 1), sp.loc)
+                    raise SceneError(problem, sp.loc)
                 if sp.has("seed"):
                     sp.int("seed")
                 if sp.type != "independent":
@@ -653,11 +653,11 @@ class _Builder:
         keep = area > 0
         pos, nrm, uvs = pos[keep], nrm[keep], uvs[keep]
         p.warn_unqueried()
-        if not len(pos):  # legal (Mitsuba renders it as nothing) but surely not what was meant
-            what = "an emitter" if np.any(emission > 0) else "a shape"
-            warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)
         if len(pos):
             self.parts.append((pos, nrm, uvs, smooth, mat, emission))
+        else:  # legal (Mitsuba renders it as nothing) but surely not what was meant
+            what = "an emitter" if np.any(emission > 0) else "a shape"
+            warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)
 
     def environment(self, obj):
         p = self.props(obj, "emitter")

@@ -319,7 +319,7 @@ def load_ply(path: str, loc: str) -> TriMesh:
 def check_finite_vertices(path: str, loc: str, v: np.ndarray, what: str) -> None:
     """Refuse a mesh with a non-finite vertex (a triangle through it would vanish from the image
     without a word)."""
-    bad = ~np.isfinite(v).all(axis=1) if len(v) else np.zeros(0, bool)
+    bad = ~np.isfinite(v).all(axis=1)
     if bad.any():
         raise SceneError(f"mesh '{path}': {what} {int(np.argmax(bad)) + 1} of {len(v)} has a non-finite "
                          f"coordinate {v[np.argmax(bad)].tolist()}", loc)
