@@ -3,7 +3,7 @@ PY ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow test-debug bench clean browser gpu-bundle gpu-check gpu-rehearse
+.PHONY: demo test test-slow test-debug bench clean browser docs gpu-bundle gpu-check gpu-rehearse
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PY) -m venv $(VENV)
@@ -20,6 +20,12 @@ demo: $(STAMP)
 	$(VENV)/bin/restir compare builtin:indirect-room --method pt --method restir-pt --method suffix-restir \
 		--equal-time 2.5 --width 96 --height 96 --reference-spp 1024 --denoise \
 		--report out/demo-compare --json out/demo-compare.json
+
+# The documentation site (MkDocs, Material): out/site/index.html. --strict: a broken link, anchor or API
+# reference fails the build. The reference pages for the CLI, the settings and the scene format are
+# generated from the code (docgen/). `make docs SERVE=1` serves it at http://127.0.0.1:8000 instead.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs $(if $(SERVE),serve,build --strict)
 
 # The report test drives Debian's chromium with chromedriver (Selenium); nothing downloads a browser.
 browser:

@@ -14,9 +14,8 @@ def add_parser(sub) -> None:
     r = add_command(sub, "render", "render a scene")
     scene_argument(r)
     r.add_argument("--method", default="pt", help="pt (path tracer), restir-di (direct light: emission plus one "
-                   "bounce; docs/restir_di.md), restir-pt (path reuse; docs/restir_pt.md) or suffix-restir "
-                   "(conditional suffix reuse with a final gather; docs/suffix_restir.md); settings with --set, "
-                   "listed by `restir info`")
+                   "bounce), restir-pt (path reuse) or suffix-restir (conditional suffix reuse with a final "
+                   "gather); settings with --set, listed by `restir info`")
     r.add_argument("--spp", type=int, help="samples per pixel per frame (default: the scene's)")
     r.add_argument("--frames", type=int, default=1, help="frames to render and average")
     r.add_argument("--width", type=int, help="image width in pixels (default: the scene's)")

@@ -4,7 +4,6 @@ the reference cache, input errors before any work, and the HTML report operated 
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 
@@ -17,6 +16,7 @@ from restir.compare.frames import _Blocks
 from restir.compare.headline import at_spp
 from restir.config import ConfigError
 from restir.image_io import read_exr
+from tests.browser import chromium
 
 ARTIFACTS = os.path.join("out", "artifacts")
 
@@ -193,19 +193,6 @@ def test_cli_refuses_bad_input_before_work(tmp_path):
     assert not (tmp_path / "cache").exists()
 
 
-def _chromium():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,1100",
-              "--allow-file-access-from-files"):
-        opts.add_argument(a)
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    return webdriver.Chrome(options=opts, service=Service(shutil.which("chromedriver") or "/usr/bin/chromedriver"))
-
-
 def report_images(result):
     """The report's images in its order: the reference, then per method its accumulated image,
     its last frame and, when denoised, the last frame denoised."""
@@ -226,7 +213,7 @@ def operate_report(index, images, screenshot, denoised=False):
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
-    driver = _chromium()
+    driver = chromium()
     try:
         driver.get("file://" + os.path.abspath(index))
         WebDriverWait(driver, 60).until(lambda d: d.execute_script("return document.body.dataset.ready === '1'"))
