@@ -1,4 +1,4 @@
-"""The package layout docs/new_method.md promises, checked on the source: no import circle
+"""The package layout docs/developer/new_method.md promises, checked on the source: no import circle
 between restir's modules (imports inside functions count: they only hide a circle), and no
 method importing another method's package (methods share `common/` and `path_reuse/`)."""
 import ast
@@ -86,7 +86,7 @@ def test_methods_do_not_import_each_other():
 
 
 def test_stage_files_numbered_from_s1_in_order():
-    """One numbering convention (docs/new_method.md): a method's own stage files are s1_*.py,
+    """One numbering convention (docs/developer/new_method.md): a method's own stage files are s1_*.py,
     s2_*.py, ... without gaps or repeats (numbered in the order the pipeline runs them; the shared
     primary hits and the direct-light component are not numbered), and the pipeline imports each."""
     import re
