@@ -1,5 +1,5 @@
 """What a denoiser keeps of an error: each method's frames through Open Image Denoise, and the same
-errors rearranged before the denoiser (issue 22, decorrelation).
+errors rearranged before the denoiser.
 
 For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the path tracer at
 1024 spp:
@@ -25,7 +25,8 @@ For frames 8-15 of a 16-frame render at 128x128 (a still camera), against the pa
     .venv/bin/python benchmarks/bench_denoiser_structure.py --phase jitter
     .venv/bin/python benchmarks/bench_denoiser_structure.py --phase regions --scene builtin:cornell-box-glossy
 
-(How it was used: BENCHMARKS.md, "The temporal history of the pixel itself".)
+(What it showed: docs/guide/when_restir_pays.md#what-the-denoiser-keeps-correlated-error and
+docs/guide/when_restir_pays.md#the-emission-rays.)
 """
 import argparse
 import json

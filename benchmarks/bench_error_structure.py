@@ -1,5 +1,5 @@
 """What a denoiser sees, on every scene the project has: `restir compare` at equal time with
-`--denoise` and the error-structure metrics, one table for BENCHMARKS.md.
+`--denoise` and the error-structure metrics, one table (docs/guide/when_restir_pays.md shows them).
 
     .venv/bin/python benchmarks/bench_error_structure.py --seconds 4 --lines 128 --out out/bench_error_structure.json
 

@@ -1,4 +1,4 @@
-"""Spatial reuse under a moving camera, after the denoiser (issue 22).
+"""Spatial reuse under a moving camera, after the denoiser.
 
 `restir compare` measures a still camera: one reference serves every frame. Under a still camera
 temporal reuse alone has a full history at every pixel, and ReSTIR PT's spatial reuse does not pay

@@ -1,4 +1,4 @@
-"""Suffix ReSTIR: the report's evaluation, reproduced and extended (issue 10), each phase in one run.
+"""Suffix ReSTIR: the report's evaluation, reproduced and extended, each phase in one run.
 
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase stages   # 800x800 shared Cornell box: per-stage ms, memory
     .venv/bin/python benchmarks/bench_suffix_restir.py --phase scaling  # final-gather time against N, M, radius

@@ -1,5 +1,5 @@
 """Bit-for-bit image hashes of every method and its main settings: the check that a refactor
-kept the images (issue 24's "images unchanged").
+kept the images.
 
     .venv/bin/python benchmarks/image_hashes.py --out out/hashes-before.json
     ... refactor ...

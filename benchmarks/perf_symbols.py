@@ -16,7 +16,7 @@ name the Python line (`<L n>`). Only the timed frames are recorded (perf's contr
         --size 512 --frames 4 --ctl /tmp/ctl
     perf report -i /tmp/p.data --sort dso,sym --stdio
 
-(How it was used: BENCHMARKS.md, "The shift inlined, and the shadow ray on three handles".)
+(How it was used: docs/changelog.md#speed-functions-that-copied-the-scene-inlined.)
 """
 import argparse
 import atexit

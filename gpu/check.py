@@ -426,7 +426,7 @@ def table(columns: list, rows: list) -> list:
 
 
 def markdown(r: dict) -> str:
-    """The results as the tables BENCHMARKS.md and the README quote."""
+    """The results as tables, for gpu_check.md (docs/guide/gpu.md)."""
     ph = r["phases"]
     env = ph.get("environment", {})
     lines = [f"# GPU check ({'quick, ' if r['quick'] else ''}device {r['device']})", "",

@@ -17,7 +17,7 @@ _wp.config.enable_backward = False
 # function left out of line copies its struct arguments (SceneDevice is about 1 KB) at every
 # call. LLVM's inlining threshold raised from Warp's 9000 to 40000 made the path tracer's frame
 # 4-5% shorter and left the images bit-identical; compiling pt's kernels takes 25 s instead of
-# 17 (BENCHMARKS.md, "A function left out of line").
+# 17 (docs/changelog.md#speed-llvms-inline-threshold-40000).
 _flags = _wp.config.cpu_compiler_flags
 if _flags is not None and "inline-threshold=" in _flags:
     _wp.config.cpu_compiler_flags = _re.sub(r"inline-threshold=\d+", "inline-threshold=40000", _flags)

@@ -11,7 +11,7 @@ That worth is rarely whole: a ReSTIR frame of 1.46 path-tracer samples is neithe
 at 1 spp nor at 2, and between the two the path tracer's error changes by about 1.4x. So the
 path tracer is rendered at the whole spp on both sides (`bracket`) and the headline interpolates
 its error between them (headline.py); rounding instead moved close comparisons by up to that
-factor (BENCHMARKS.md, "Equal time with the path tracer's spp not rounded").
+factor (docs/changelog.md#restir-compare-the-path-tracer-at-the-exact-frame-time).
 """
 import dataclasses
 import math

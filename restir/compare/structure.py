@@ -29,7 +29,7 @@ from .metrics import EPSILON
 
 BLOCK_SIZES = (2, 4, 8, 16)
 RADII = tuple(range(1, 17))
-TABLE_RADII = (1, 4, 8, 16)  # the radii the terminal table and BENCHMARKS.md show
+TABLE_RADII = (1, 4, 8, 16)  # the radii of the terminal table and the benchmarks' tables
 
 
 def relative_error(image, reference) -> np.ndarray:

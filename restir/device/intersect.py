@@ -88,8 +88,8 @@ def segment_unblocked(mesh: wp.uint64, embree_scene: wp.uint64, embree_occluded:
                       wi: wp.vec3, light_p: wp.vec3, light_n: wp.vec3, is_env: int) -> bool:
     """visible_to_light's work, out of line on the three handles it reads. Warp passes structs by
     value: taking the whole SceneDevice (1152 B), this function, which the reuse kernels' inliner
-    keeps out of line, copied it at every shadow ray (BENCHMARKS.md, "The shift inlined, and the
-    shadow ray on three handles")."""
+    keeps out of line, copied it at every shadow ray
+    (docs/changelog.md#speed-functions-that-copied-the-scene-inlined)."""
     origin = offset_origin(p, ng, wi)
     if is_env != 0:
         return unblocked(mesh, embree_scene, embree_occluded, origin, wi, T_MAX)

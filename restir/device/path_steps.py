@@ -11,7 +11,7 @@ to NEE-only or BSDF-only, two other estimators of the same integral used as cros
 
 The two large steps are force-inlined (`inline=True`): called out of line they take the material
 and hit structs by value at each call, and the path tracer ran 5-8% slower on the CPU (same-run
-A/B, BENCHMARKS.md).
+A/B, docs/changelog.md#speed-the-path-tracers-large-steps-inlined).
 """
 import warp as wp
 

@@ -53,7 +53,7 @@ class SceneDevice:
 def texture_lookup(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), tex: int, uv: wp.vec2) -> wp.vec3:
     """texture_eval kept out of line. With it and bump.bump_normal out of line, material_at becomes
     small enough to be inlined at the path vertices of the reuse passes; out of line, it copied
-    SceneDevice at every call (BENCHMARKS.md, "A function left out of line"). A textured hit pays
+    SceneDevice at every call (docs/changelog.md#speed-llvms-inline-threshold-40000). A textured hit pays
     a call instead."""
     return texture_eval(textures, texels, tex, uv)
 

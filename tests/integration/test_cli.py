@@ -156,7 +156,7 @@ def test_validate_command(tmp_path, capsys):
     assert main(["validate", "builtin:cornell-box", "--runs", "1"]) == 2  # a user error, not a traceback
 
 
-# ----------------------------------------------------------------- a new user's first hour (issue 11)
+# ------------------------------------------------------------------------- a new user's first hour
 SMALL = ["--width", "8", "--height", "8", "--spp", "1", "--quiet"]
 
 

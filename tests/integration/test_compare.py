@@ -274,7 +274,7 @@ def test_report_in_a_browser(comparison, tmp_path):
 
 @pytest.mark.slow
 def test_the_documented_command_in_a_browser(tmp_path):
-    """The issue's command as written (20 s per method at the Cornell box's own 256x256), its report
+    """The documented command as written (20 s per method at the Cornell box's own 256x256), its report
     operated in chromium, its JSON's numbers recomputed from the report's EXRs."""
     out = tmp_path / "cmp"
     env = {**os.environ, "RESTIR_CACHE": str(tmp_path / "cache")}

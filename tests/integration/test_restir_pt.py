@@ -273,7 +273,7 @@ def test_fused_trace_and_temporal_is_the_split_pipeline_bit_for_bit(settings):
 
 
 def test_memory_per_pixel():
-    """Issue 22's memory target, 256 B per pixel with the film's accumulation not counted, met by
+    """The memory target, 256 B per pixel with the film's accumulation not counted, met by
     the defaults (direct=pt: direct light in the path reservoirs; the primary rays rebuilt from the
     camera position; emission.adaptive's records and marks, 17 B: 237 B); with the ReSTIR DI
     component (direct=restir-di) 297 B; with direct=nee 249 B (the trace stage's direct light, 12

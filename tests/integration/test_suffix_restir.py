@@ -82,7 +82,7 @@ def test_mutants_are_biased_on_the_sphere(mutation, settings, runs):
 
 
 def test_memory_per_pixel():
-    """Issue 23's memory target, 400 B per pixel with the film's accumulation not counted, met by
+    """The memory target, 400 B per pixel with the film's accumulation not counted, met by
     the defaults (direct=pt; the primary rays rebuilt from the camera position; emission.adaptive's
     records and marks, 17 B): 397 B; with the ReSTIR DI component 457 B. The registry counts every
     buffer the method allocates."""

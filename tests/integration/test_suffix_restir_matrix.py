@@ -20,7 +20,7 @@ from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 # The official prototype's direct light, the ReSTIR DI component: the default until 2026-12-06, when
-# direct=pt became it (BENCHMARKS.md, "Suffix ReSTIR's direct light"). The cells that test one
+# direct=pt became it (docs/changelog.md#suffix-restir-directpt). The cells that test one
 # stage or option keep it, as they were validated (VALIDATION.md); the defaults' cells (C5-all,
 # -orbit, -dolly, -centre, C5-all-N128) take direct=pt, and C5-official is the old C5-all.
 OFFICIAL = {"direct": "restir-di", "emission.rays": 1}

@@ -1,4 +1,4 @@
-"""The Python API as a Mitsuba user would call it (issue: arguments silently ignored)."""
+"""The Python API as a Mitsuba user would call it (no argument silently ignored)."""
 import re
 import pathlib
 

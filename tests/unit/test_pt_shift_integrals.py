@@ -136,7 +136,7 @@ def test_shifts_preserve_integrals(shift):
 # (mutation, shift, frames): caught means the verdict above fails. An inverted J makes the
 # estimate's variance explode (MDB far above the bound); the others move the mean.
 # Not caught here: drop_rc_pdf (the pdf ratio at z matters only on glossy z, where this test
-# has no power; see the module docstring) - an open item of issue 9.
+# has no power; see the module docstring): not covered by this test.
 MUTANTS = [("bsdf_twice", "reconnection", 64), ("invert_jacobian", "reconnection", 64),
            ("skip_destination_criteria", "hybrid", 256)]
 

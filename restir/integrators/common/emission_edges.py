@@ -4,7 +4,7 @@ The extra rays only lower variance where the emission seen directly varies over 
 edge of an emitter (or over a textured one, or the environment). Inside an emitter of constant
 radiance, or where no emitter is in view, every ray returns the same value and the n - 1 extra
 rays are wasted; on the shared Cornell box at 512 lines they were about a quarter of a
-path-tracer frame (BENCHMARKS.md, "The emission seen directly from more camera rays").
+path-tracer frame (docs/guide/when_restir_pays.md#only-near-the-emitters-edges).
 
 So with `emission.adaptive` on, a pixel traces the n rays only where earlier launches of its stage
 saw the emission vary nearby, and one ray elsewhere: where the previous launch saw it vary in the

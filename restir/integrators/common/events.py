@@ -4,7 +4,7 @@ A stage counts in a vec4i: [non-finite resampling weights or outputs, zero-weigh
 inputs, failed shifts, rays traced]. A shift "fails" when a reused sample with W > 0 has target 0
 in the destination domain (it lands outside the destination's support). Counted, never hidden.
 
-The per-pixel scratch the counts are written to is packed to 8 bytes (`EventCounts`, issue 22's
+The per-pixel scratch the counts are written to is packed to 8 bytes (`EventCounts`, to save
 memory): the rays in 32 bits, the three rare counts in 10 bits each. A pass's other per-pixel
 counts (shifts tried and succeeded, samples by origin, gather slots) are four 16-bit counts
 (`PassCounts`). Both saturate instead of wrapping, and the tally counts every saturated field,

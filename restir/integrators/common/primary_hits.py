@@ -11,7 +11,7 @@ rays: the sample's own and n - 1 more on a lattice shifted by its position (came
 The rest of every path still starts at the sample's own hit. Each ray's emission is an unbiased
 estimate of the pixel's, so the mean is; it spends n - 1 rays on the one term that path reuse
 cannot improve: the edge of an emitter seen directly, sampled by one ray a pixel, is the largest
-error a denoiser leaves on a lit Cornell box (BENCHMARKS.md, "The glossy box after the denoiser").
+error a denoiser leaves on a lit Cornell box (docs/guide/when_restir_pays.md#the-emission-rays).
 With `emission.adaptive` (the default) the n rays are traced only at pixels where recent launches
 saw the emission vary nearby or a small emitter lies near, one elsewhere (common/emission_edges.py:
 why that stays unbiased); the stage then also reads and writes those records.

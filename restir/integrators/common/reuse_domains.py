@@ -26,7 +26,7 @@ def reproject(camera: Camera, prev_camera: Camera, pixel: int, p: wp.vec3) -> in
     filter offset reaches into the neighbouring pixels (a tent or Gaussian filter), so a pixel's
     history would come from a neighbour in a third of the frames even under a still camera, and
     the samples would wander between pixels, frame after frame: an error correlated between
-    neighbours that the denoiser keeps (BENCHMARKS.md, "The temporal history of the pixel itself")."""
+    neighbours that the denoiser keeps (docs/guide/when_restir_pays.md#what-the-denoiser-keeps-correlated-error)."""
     cur = project_to_pixel(camera, p)
     prev = project_to_pixel(prev_camera, p)
     if prev[0] == -1.0 and prev[1] == -1.0:  # project_to_pixel's answer for a point behind the camera
@@ -134,8 +134,7 @@ def spatial_radius_for(radius_at_1080: float, height: int) -> float:
     copies a neighbour's sample, so a disk of a few pixels puts copies of one sample next to each
     other, an error the denoiser keeps as detail. At 128 lines ReSTIR PT's error after Open Image
     Denoise was 1.4-6x the path tracer's at equal time with the disk scaled down to 2.4 px, and
-    1.1-1.4x lower with 16-24 px on three of four scenes (BENCHMARKS.md, "The spatial radius in
-    pixels")."""
+    1.1-1.4x lower with 16-24 px on three of four scenes (docs/guide/when_restir_pays.md#the-spatial-radius)."""
     return radius_at_1080 * max(1.0, height / REFERENCE_LINES)
 
 

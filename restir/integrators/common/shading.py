@@ -23,7 +23,7 @@ class Shading:
 # by value, so out of line each call copies the whole SceneDevice (about 1 KB) and returns a
 # Shading. The opacity-mask lookup in material_at pushed this function out of line under the CPU
 # compiler's inlining budget, and ReSTIR DI's visibility, temporal, spatial and shade stages took
-# 1.3-1.8x as long (BENCHMARKS.md, "A function left out of line").
+# 1.3-1.8x as long (docs/changelog.md#speed-load_shading-forced-inline).
 @wp.func(inline=True)
 def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     s = Shading()
@@ -52,7 +52,7 @@ def load_shading(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
 def load_shading_outlined(scene: SceneDevice, gb: GBuffer, pixel: int) -> Shading:
     """load_shading kept out of line, for a kernel that calls it once before a long loop (ReSTIR
     DI's initial candidates): one copy per pixel, and the loop's code stays compact; inlined
-    there, the stage took 6% longer (BENCHMARKS.md, "A function left out of line")."""
+    there, the stage took 6% longer (docs/changelog.md#speed-llvms-inline-threshold-40000)."""
     return load_shading(scene, gb, pixel)
 
 

@@ -6,9 +6,10 @@ G-buffers, filter weights and emission), with its stage times, counters and buff
 under "di.". Its settings are the method's `di.*` settings.
 
 Lighter defaults than ReSTIR DI's own (32 light candidates, 2 spatial rounds): measured at equal
-time on the indirect room, veach-bidir and the glossy box (BENCHMARKS.md, "ReSTIR DI inside
-ReSTIR PT"), 8 candidates and 1 round leave ReSTIR PT's error unchanged (within 0.3%) and its
-frame 17-33% cheaper: the direct light's share of the error is small beside the indirect paths'
+time on the indirect room, veach-bidir and the glossy box
+(docs/changelog.md#restir-pts-restir-di-component-8-candidates-1-round),
+8 candidates and 1 round leave ReSTIR PT's error unchanged (within 0.3%) and its frame 17-33%
+cheaper: the direct light's share of the error is small beside the indirect paths'
 and the one camera sample's.
 """
 import copy

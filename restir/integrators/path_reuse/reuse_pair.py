@@ -124,7 +124,7 @@ def make_reuse_pair(shift=shift_path, module=None):
     # its loop over neighbours): left out of line by the compiler, each neighbour copied the scene
     # and both domains (Warp passes structs by value); inlined, Suffix ReSTIR's suffix spatial pass
     # took 0.73x as long. Forcing the other three inline made ReSTIR PT's frame 5% slower
-    # (BENCHMARKS.md, "The shift inlined, and the shadow ray on three handles").
+    # (docs/changelog.md#speed-functions-that-copied-the-scene-inlined).
     inline = True if getattr(shift, "inlined", False) else None
 
     @wp.func(module=module, name=named("shift_in"))

@@ -330,7 +330,8 @@ shift_path = make_shift()
 # spatial kernels, Suffix ReSTIR's suffix temporal and spatial kernels): out of line, every call
 # copies its arguments (Warp passes structs by value: SceneDevice alone is 1152 B) and the compiler
 # cannot fit it to the call site. Inlined, ReSTIR PT's spatial pass took 0.7x as long and its
-# frame 0.88x at 512x512; Suffix ReSTIR's frame 0.96-0.98x (BENCHMARKS.md, "The shift inlined").
+# frame 0.88x at 512x512; Suffix ReSTIR's frame 0.96-0.98x
+# (docs/changelog.md#speed-functions-that-copied-the-scene-inlined).
 # Each inlined copy lengthens the module's build (ReSTIR PT's CUDA build 80 -> 107 s, Suffix
 # ReSTIR's 80 -> 109 s), so the gather, which shifts in several places, keeps the out-of-line build.
 SHIFT_INLINED = make_shift(inline=True)

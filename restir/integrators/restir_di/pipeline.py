@@ -35,13 +35,13 @@ MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
 })
 
 
-# Defaults chosen by measurement with a jittered camera (BENCHMARKS.md, "ReSTIR DI defaults"): 32
+# Defaults chosen by measurement with a jittered camera (docs/changelog.md#restir-di-temporalcap5-spatialradiusauto): 32
 # light candidates; temporal reuse with the history capped at 5x the current confidence (the
 # literature's 20x drifts into blotches); spatial reuse with 3 neighbours, 2 rounds, in a radius of
 # 15 px up to 1080 lines, scaled with the image height above (the literature's 30 px at any size
 # left reuse nearly idle on small images; scaled down with the height as well, to 2 px at 128
 # lines, the copies spatial reuse makes lay next to each other, which a denoiser keeps:
-# BENCHMARKS.md, "The spatial radius in pixels").
+# docs/changelog.md#the-spatial-radius-in-pixels).
 @dataclasses.dataclass
 class DISettings(Settings):
     candidates: int = setting("candidates", 32, "light-sampled candidates N_L of the initial RIS")

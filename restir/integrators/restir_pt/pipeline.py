@@ -70,13 +70,13 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 
 
 # The official defaults (ALGORITHMS.md 4.6), with the spatial radius in pixels (scaled up above
-# 1080 lines), but for two chosen by the denoised equal-time measurement (BENCHMARKS.md, "ReSTIR
-# PT's defaults chosen after the denoiser"): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
+# 1080 lines), but for two chosen by the denoised equal-time measurement
+# (docs/changelog.md#restir-pt-directpt-temporalcap5): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
 # frame, 252 B per pixel) and a temporal cap of 5, not the official 20 (less correlated error);
 # together the lowest error after the denoiser at equal time in 5 of 8 runs and the lowest
 # accumulated error in all 8. The official values are direct=restir-di, temporal.cap=20. And
-# reciprocal neighbours (spatial.reciprocal, ReSTIR PT Enhanced's; BENCHMARKS.md, "Reciprocal
-# neighbours"): half the spatial shifts, frames 7-14% cheaper at 128 lines and 15-19% at 512, less
+# reciprocal neighbours (spatial.reciprocal, ReSTIR PT Enhanced's; docs/changelog.md#restir-pt-reciprocal-neighbours):
+# half the spatial shifts, frames 7-14% cheaper at 128 lines and 15-19% at 512, less
 # denoised error in 5 of 8 runs (geometric mean 3.54x the path tracer's against 3.77x), less
 # correlated in 7 of 8, lower accumulated error in all 8.
 # And emission.rays 4 (every other method's default is 1): the emitter's edge seen directly,
@@ -84,8 +84,8 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 # and path reuse cannot lower it. With four rays the defaults went from 1.09x and 1.25x above the
 # path tracer at equal time after the denoiser there to 1.21x and 1.16x below it, with the other
 # scenes unchanged (no emitter in view); the frame 2-4% dearer at 128 lines, about a quarter of a
-# path-tracer frame more at 512 (the primary-hit stage 60 -> 200-230 ms; BENCHMARKS.md, "The emission
-# seen directly from more camera rays").
+# path-tracer frame more at 512 with the rays at every pixel (the primary-hit stage 60 -> 200-230 ms;
+# docs/changelog.md#emissionrays-4-for-restir-pt-8-for-suffix-restir).
 @dataclasses.dataclass
 class PTSettings(PathReuseSettings):
     emission_rays: int = setting("emission.rays", 4, EMISSION_RAYS_DOC)

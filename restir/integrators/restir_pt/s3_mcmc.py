@@ -7,7 +7,8 @@ change (confidence is never a sample value), and neither does the number of step
 setting, the same for every sample. The pixel's own estimate keeps its luminance (p_hat(Y) W_Y
 = p_hat(X) W_X); what changes is what spatial reuse and the next frame copy: a sample many
 pixels share gets a different suffix in each. Measured, that changes the error's correlation
-by no more than the run's noise (docs/decorrelation.md 3, BENCHMARKS.md), so it is off by default.
+by no more than the run's noise
+(docs/guide/decorrelation.md#3-mcmc-mutations-built-and-measured-they-do-not-decorrelate), so it is off by default.
 
 Runs between temporal and spatial reuse, reading only the pixel's own reservoir.
 Reads: scene, G-buffer, reservoirs. Writes: reservoirs_out (ping-pong), counts (samples that have

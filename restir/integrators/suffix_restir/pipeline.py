@@ -52,7 +52,7 @@ SPATIAL_RADIUS_1080 = 30.0
 
 # The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii in pixels (scaled up
 # above 1080 lines), but for the direct light, chosen by the denoised equal-time measurement
-# (BENCHMARKS.md, "Suffix ReSTIR's direct light"): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
+# (docs/changelog.md#suffix-restir-directpt): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
 # component: frames 6-13% cheaper, level after the denoiser (within 4% either way over two seeds on
 # three scenes; on Veach Ajar, whose direct light at the primary hits is 0.15% of the image, the
 # same), accumulated error lower or equal in every run, 60 bytes a pixel less.
@@ -60,7 +60,7 @@ SPATIAL_RADIUS_1080 = 30.0
 # emission seen directly; with eight, the glossy Cornell box's denoised error at equal time went
 # from 1.72x and 1.96x the path tracer's to 1.16x and 1.13x (two seeds; four rays: 1.31x, 1.32x),
 # the frame at 512 lines about 5% dearer (the primary-hit stage 62-71 -> 467 ms of 8.4-8.6 s;
-# BENCHMARKS.md, "The emission seen directly from more camera rays").
+# docs/guide/when_restir_pays.md#the-emission-rays).
 @dataclasses.dataclass
 class SuffixSettings(PathReuseSettings):
     emission_rays: int = setting("emission.rays", 8, EMISSION_RAYS_DOC)
@@ -191,7 +191,7 @@ class SuffixReSTIR(PathReuseIntegrator):
             # no centres by pixel (the grid's kernels rebuild them from the prefix ends); the
             # sort's keys and values need twice the entries (Warp's radix sort); a table of the
             # next power of two >= half the pixel count (cells hold about 7 boxes each at 800x800, so
-            # under a third of its slots are taken: BENCHMARKS.md)
+            # under a third of its slots are taken)
             table = 1 << max(1, (n // 2 - 1).bit_length())
             self.search.centers = wp.zeros(0, dtype=wp.vec3, device=self.device)
             self.search.keys = self.buffer("search.grid_keys", wp.int32, 2 * n)

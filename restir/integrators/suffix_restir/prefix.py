@@ -61,8 +61,8 @@ class Prefix:
 
 # Inlined at its two calls (the prefix stage, the gather's fresh prefixes): out of line, each call
 # copied the scene (1152 B), the parameters and the shading point, 4 times a pixel in the gather;
-# inlined the frame is 4% cheaper, the CUDA build no slower (BENCHMARKS.md, "The shift inlined, and
-# the shadow ray on three handles").
+# inlined the frame is 4% cheaper, the CUDA build no slower
+# (docs/changelog.md#speed-functions-that-copied-the-scene-inlined).
 @wp.func(inline=True)
 def trace_prefix(scene: SceneDevice, params: SRParams, x0: Shading, seed: wp.uint32, with_internal: bool) -> Prefix:
     """Trace from the primary hit x0 with the key `seed` until the prefix end (or the path's end);

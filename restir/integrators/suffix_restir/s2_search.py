@@ -7,7 +7,7 @@ one of three structures (the same code on the CPU and CUDA, rebuilt every frame)
   are twice as wide as the largest half-size r, so the cube [x - r, x + r]^3 that holds every
   candidate centre overlaps at most 2 x 2 x 2 cells: 8 table lookups per query, then contiguous
   reads. (Warp's hash grid below returns candidates as pixel indices, each a random read of its
-  box: at 800x800 the query became memory-bound, BENCHMARKS.md.)
+  box: at 800x800 the query became memory-bound, docs/changelog.md#suffix-restir-gathersearchgrid.)
 - `hashgrid`: Warp's hash grid over the box centres (`wp.HashGrid`, cells as wide as the
   largest box's half-size), queried over the cube of that half-size around the point, each
   candidate then tested against its own box;
@@ -20,7 +20,7 @@ distance exactly 0. A pixel's box has centre x_P and half-size r = box_scale x f
 gather.radius_type=fixed, the multiplier x the scene's smallest extent over the larger image
 side, 5.9); pixels without a prefix end get an
 empty box at a point far outside the scene. Which pixels are found depends on prefix ends only,
-never on suffix samples. (Measured costs of the two: BENCHMARKS.md.)
+never on suffix samples. (Measured costs: docs/changelog.md#suffix-restir-gathersearchgrid.)
 """
 import warp as wp
 
@@ -189,7 +189,8 @@ def grid_candidates(s: Slots, search: SearchStructure, x: wp.vec3, count: int) -
     """s with every box of the cells overlapping [x - r, x + r]^3 considered (at most 2 x 2 x 2:
     cells are 2.02 r wide). Two cells that share a table slot read its run twice; consider_box
     keeps a pixel once. (Slots deduplicated first, or cells half or a third as wide with up to
-    27 lookups, or runs sorted by x with a binary search: all slower, BENCHMARKS.md.)"""
+    27 lookups, or runs sorted by x with a binary search: all slower,
+    docs/changelog.md#speed-the-prefix-searchs-candidate-loop.)"""
     out = s
     lo = grid_cell(search, x - wp.vec3(search.radius))
     hi = grid_cell(search, x + wp.vec3(search.radius))
