@@ -165,7 +165,7 @@ class CodeIndex:
         return keys, prefixes
 
     def is_setting_key(self, text: str) -> bool:
-        full = {k for k in self.setting_keys}
+        full = set(self.setting_keys)
         full |= {p + k for p in self.setting_prefixes for k in full}
         full |= {p + k for p in self.setting_prefixes for k in full}
         if text.endswith(".*"):
@@ -392,7 +392,8 @@ def check_tree(lines: list, index: CodeIndex, where: str) -> list:
             p = os.path.join(full, entry)
             if entry.endswith(".py") and entry != "__init__.py":
                 actual.add(entry)
-            elif os.path.isdir(p) and entry != "__pycache__" and glob.glob(os.path.join(p, "**", "*.py"), recursive=True):
+            elif os.path.isdir(p) and entry != "__pycache__" and \
+                    glob.glob(os.path.join(p, "**", "*.py"), recursive=True):
                 actual.add(entry + "/")
         for missing in sorted(actual - listed):
             problems.append(f"{where}: the tree opens {folder} but does not list {missing}")
@@ -400,13 +401,13 @@ def check_tree(lines: list, index: CodeIndex, where: str) -> list:
 
 
 def check_page(text: str, index: CodeIndex | None = None, name: str = "page") -> list:
-    """Every problem of the page, as 'name:scope: what'."""
+    """Every problem of the page, as 'name: scope: what'."""
     index = index or code_index()
     scopes, fences = split_page(text)
     problems = []
-    for i, lines in enumerate(scopes):
+    for lines in scopes:
         problems += check_scope(lines, index, f"{name}: {lines[0].strip()[:60]!r}")
-    for info, lines in fences:
+    for _, lines in fences:
         first = next((ln for ln in lines if ln.strip()), "")
         if first and not first.startswith(" ") and first.split()[0].endswith("/") and \
                 first.split()[0].startswith(tuple(r + "/" for r in PATH_ROOTS)):
