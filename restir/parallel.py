@@ -40,7 +40,8 @@ def launch_pixels(kernel, count: int, inputs: list, outputs: list, device, slice
                   reverse: bool = False) -> None:
     """Launch `kernel(offset, *inputs, *outputs)` over `count` items, split over CPU cores.
 
-    reverse (a debug permutation, TESTING.md R2): run the slices one after another, last first,
+    reverse (a debug permutation, docs/validation.md#level-7-races-and-determinism): run the slices
+    one after another, last first,
     so that items are processed in a different order than any forward launch; a correct pass gives
     bitwise the same result, a pass that reads its own outputs does not.
     """

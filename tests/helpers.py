@@ -51,7 +51,8 @@ def sphere_cap(size=16):
     return restir.load_scene("builtin:sphere-cap", width=size, height=size, **SPHERE_CAP)
 
 
-# ------------------------------------------------------------------ over frames and parameters (TESTING.md 5.7, 5.8)
+# ------------------------------------------------------------------ over frames and parameters
+# (docs/validation.md#level-4-invariance-tests, docs/validation.md#level-5-long-run-stability)
 def run_means(settings, runs=32, frames=8, method="restir-pt"):
     """Per-run image means (non-emitting pixels only: the cap is seen in a few) and the z-test."""
     cfg = restir.RenderConfig(method=method, spp=1, frames=frames, max_depth=SPHERE_DEPTH, settings=settings)
@@ -166,7 +167,8 @@ MATRIX_REFERENCE_SPP = {"veach-mis": 48}
 # PT 8.8%, Suffix ReSTIR 7.8% at 128 x 32; with MCMC mutations 8.6%); ReSTIR PT's defaults on the masks, whose per-run
 # means are heavy-tailed (light through the blinds is found by BSDF sampling only; excess kurtosis
 # about 6): at 64 x 8 one tile read z = 5.45 (crit 4.93) while the image passed (z -0.5), and two
-# replicates with fresh seeds passed (max tile |z| 2.04 and 2.31; VALIDATION.md).
+# replicates with fresh seeds passed (max tile |z| 2.04 and 2.31;
+# docs/validation.md#results-restir-pt-stages-and-options).
 MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128,
                # direct=pt (ReSTIR PT's default since 2026-12-06) in the room: MDB 7.3% at 64 runs, 5.0% at 128
                **{("indirect-room", c): 128 for c in ("C4-defaults", "C4-orbit", "C4-dolly", "C4-centre")},

@@ -29,8 +29,9 @@ def device_scene(tree: dict, device="cpu") -> DeviceScene:
 
 def half_dark_scene():
     """A floor lit by a light above it (facing down) and an equally bright light beside it facing
-    up, at nothing: about half of all light candidates have zero contribution (TESTING.md C6,
-    the target of defects A1 and A3). The camera looks at the floor from below the lights."""
+    up, at nothing: about half of all light candidates have zero contribution (the half-dark
+    scene of docs/validation.md#level-3-stage-matrix, the target of defects A1 and A3). The camera
+    looks at the floor from below the lights."""
     from restir.scene.transforms import look_at
 
     def quad(cx, y, s, up):

@@ -1,4 +1,5 @@
-"""Resampling MIS weights over a fixed set of techniques (TESTING.md 5.0 (iii), (v)).
+"""Resampling MIS weights over a fixed set of techniques (docs/validation.md#what-has-to-hold,
+conditions 3 and 5).
 
 Notation for one input sample y in the current (canonical) domain c, from technique i:
   d_j(y) = p_hat_j(T_{c->j}(y)) * J_{c->j}(y) * M_j   the density technique j would assign to y

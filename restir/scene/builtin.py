@@ -10,8 +10,9 @@
   pixel's value is 1 - 0.5^max_depth (1 for unbounded depth).
 - `indirect-room`: the Cornell room lit almost only indirectly (its light faces the ceiling
   above a baffle), with glossy surfaces: ReSTIR PT's test and benchmark scene.
-- `sphere-cap`: TESTING.md A1: a closed diffuse sphere whose emissive cap covers a fraction
-  `phi` of its area; every non-emitting point has the same radiance (see `sphere_cap_radiance`).
+- `sphere-cap`: a closed diffuse sphere whose emissive cap covers a fraction `phi` of its area;
+  every non-emitting point has the same radiance (see `sphere_cap_radiance`; A1 of
+  docs/validation.md#level-2-analytic-scenes-and-external-references).
 
 The two closed spheres default to max_depth ANALYTIC_MAX_DEPTH = 64, not unbounded: no path
 ever escapes them and Russian roulette is off by default, so unbounded depth means 1023 bounces
@@ -271,7 +272,8 @@ BUILTIN_DESCRIPTIONS = {
     "cornell-box-glossy": "the Cornell box with a rough-conductor tall block and Beckmann back wall",
     "furnace": f"closed emitting sphere, albedo 0.5: every pixel 1 - 0.5^max_depth; max_depth "
                f"{ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH}; -1: unbounded, 1)",
-    "sphere-cap": f"closed diffuse sphere lit by an emissive cap (TESTING.md A1), analytic radiance; "
+    "sphere-cap": f"closed diffuse sphere lit by an emissive cap, analytic radiance "
+                  f"(docs/validation.md#level-2-analytic-scenes-and-external-references); "
                   f"max_depth {ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH - 1}; -1: unbounded)",
     "many-lights": "the Cornell room lit by 400 small coloured emitters (ReSTIR DI's benchmark)",
     "indirect-room": "the Cornell room lit almost only indirectly (light hidden, facing the ceiling), glossy "

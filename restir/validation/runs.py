@@ -79,7 +79,8 @@ class IndependentRuns(ImageBatches):
             self.stats.append(r.stats)
             for name, n in r.stats.get("counters", {}).items():
                 if name.startswith("nonfinite") and n:
-                    raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable (TESTING.md 5.1)")
+                    raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable "
+                                         "(docs/validation.md#harness-rules)")
                 self.counters[name] = self.counters.get(name, 0) + n
             images.append(r.image)
         super().__init__(images)
@@ -138,7 +139,8 @@ class Validation:
 def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, reference_runs: int | None = None,
              tile: int = 8, alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB, workers: int = 1,
              ray: str | None = None) -> Validation:
-    """Compare `config` against `reference` (both noisy; Welch z per channel, TESTING.md 5.2);
+    """Compare `config` against `reference` (both noisy; Welch z per channel,
+    docs/validation.md#the-z-tests-image-tile-and-pixel);
     a pass needs a minimum detectable bias of at most `max_mdb` (see Validation.verdict). The runs
     are independent tasks: `workers` local processes or a Ray cluster (restir/fanout.py)."""
     tested = IndependentRuns(scene, config, runs, seed0=1000, workers=workers, ray=ray)

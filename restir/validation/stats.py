@@ -2,7 +2,7 @@
 
 False-failure rates: every test states its alpha. Chi-square tests use alpha = 1e-3 per test;
 z-tests split alpha = 1e-3 per configuration between image, tile and pixel levels (Bonferroni),
-as TESTING.md section 5.2 describes.
+as docs/validation.md#statistical-machinery describes.
 """
 import numpy as np
 from scipy import stats as sps
@@ -72,7 +72,7 @@ def z_threshold(alpha: float, tests: int = 1, df: int | None = None) -> float:
 
 
 def mdb(z_crit: float, std_err: float, mean: float) -> float:
-    """Minimum detectable relative bias at 80% power (TESTING.md 5.2)."""
+    """Minimum detectable relative bias at 80% power (docs/validation.md#minimum-detectable-bias)."""
     return (z_crit + Z_POWER) * std_err / max(abs(mean), 1e-30)
 
 
@@ -90,7 +90,8 @@ def tile_means(img: np.ndarray, var: np.ndarray, tile: int):
 
 
 class ZTestReport:
-    """Image, tile and pixel z-tests of one channel of a noisy image against a reference (TESTING.md 5.2).
+    """Image, tile and pixel z-tests of one channel of a noisy image against a reference
+    (docs/validation.md#the-z-tests-image-tile-and-pixel).
 
     The family-wise false-failure rate alpha = 1e-3 is split 4e-4 (image), 3e-4 (tiles),
     3e-4 (pixels) with Bonferroni inside each level (Holm's step-down procedure rejects some
@@ -162,9 +163,9 @@ class ZTestReport:
         self.tile_crit = z_threshold(0.3 * alpha, max(1, self.tile_z.size), agg_df)
         self.pixel_crit = z_threshold(0.3 * alpha, self.pixels, df)
         self.tail_crit = 3.0 if df is None else float(sps.t.isf(sps.norm.sf(3.0), df))
-        # Skewness guard (TESTING.md 5.2), per pixel: a pixel whose per-batch statistic has
-        # |skew| > 1 is inconclusive, not judged; the whole pixel level is inconclusive when the
-        # median pixel is.
+        # Skewness guard (docs/validation.md#heavy-tails-the-skew-and-kurtosis-guards), per pixel:
+        # a pixel whose per-batch statistic has |skew| > 1 is inconclusive, not judged; the whole
+        # pixel level is inconclusive when the median pixel is.
         self.skew = 0.0 if skew is None else float(np.median(np.abs(np.asarray(skew))))
         self.pixel_conclusive = self.skew <= 1.0
         # Degenerate pixels, also not judged: against a noisy reference, a pixel whose batches
@@ -276,7 +277,7 @@ class RGBZTest:
 
     def zmap(self) -> np.ndarray:
         """Per-pixel z averaged over the channels as an RGB image: red where the estimate is
-        above the reference, blue below, full intensity at |z| >= 5 (TESTING.md 5.12)."""
+        above the reference, blue below, full intensity at |z| >= 5 (docs/validation.md#z-maps)."""
         z = np.mean([r.pixel_z for r in self.reports], axis=0)
         z = np.clip(np.nan_to_num(z) / 5.0, -1, 1)
         return np.stack([np.maximum(z, 0), np.zeros_like(z), np.maximum(-z, 0)], -1).astype(np.float32)

@@ -38,7 +38,8 @@ def test_furnace(device, max_depth, strategy):
 
 @pytest.mark.parametrize("max_depth", [2, 3, -1])
 def test_sphere_with_emissive_cap(device, max_depth):
-    """TESTING.md A1 with phi = 0.05: every non-emitting point has the same radiance.
+    """A1 (docs/validation.md#level-2-analytic-scenes-and-external-references) with phi = 0.05:
+    every non-emitting point has the same radiance.
 
     The sphere is tessellated (256 x 128 equal-area bands); its deviation from the analytic
     sphere changes the irradiance by far less than the test's minimum detectable bias.

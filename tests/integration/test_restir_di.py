@@ -87,7 +87,8 @@ def test_spatial_reuse_matches_direct_path_tracing(name, config, tmp_path):
 
 @pytest.mark.parametrize("mutation", ["drop_empty_neighbors", "skip_zero_canonical"])
 def test_mutations_are_detected(mutation):
-    """Power check (TESTING.md 5.11): defects A3 and A1 must fail the same comparison.
+    """Power check (docs/validation.md#power-checks-the-mutation-table): defects A3 and A1 must fail
+    the same comparison.
 
     At 4x the samples of the unbiasedness test, the mutants' image-level |z| is about 10 (A3,
     brighter) and 9.5 (A1, darker) against a threshold of 3.8: detected with probability > 0.99.
@@ -256,7 +257,8 @@ def k_trend(mutation="none"):
 
 
 def test_invariance_in_k():
-    """I1 (TESTING.md 5.7): the image mean must not depend on the neighbour count, on the
+    """I1 (docs/validation.md#level-4-invariance-tests): the image mean must not depend on the
+    neighbour count, on the
     half-dark scene where a k-dependent bias (defects A2/A3) would show."""
     z, crit, trend = k_trend()
     assert z < crit and trend < 3.5
@@ -291,7 +293,8 @@ def test_default_restir_di_on_shared_scenes(name):
 
 
 def test_every_frame_is_unbiased(tmp_path):
-    """L1 (TESTING.md 5.8): frame t alone (not an average) is unbiased, for t in
+    """L1 (docs/validation.md#level-5-long-run-stability): frame t alone (not an average) is
+    unbiased, for t in
     {0, 1, 2, 4, 8, 15}: 48 independent runs, Bonferroni over the 6 frames (alpha 1e-3 in all).
     Frame 0 also checks initialisation (no stale history); later frames catch drift."""
     from restir.validation import IndependentRuns
@@ -321,7 +324,8 @@ def test_every_frame_is_unbiased(tmp_path):
 
 
 def test_no_drift_over_many_frames():
-    """L2 (TESTING.md 5.8), fast version: 8 seeds x 600 frames, 8 neighbours, batches of 50
+    """L2 (docs/validation.md#level-5-long-run-stability), fast version: 8 seeds x 600 frames, 8
+    neighbours, batches of 50
     frames. A runaway temporal feedback loop (symptom b of the seed report) shows as a trend in
     the batch means or as growing maxima."""
     check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50))
@@ -329,13 +333,14 @@ def test_no_drift_over_many_frames():
 
 @pytest.mark.slow
 def test_no_drift_over_many_frames_slow():
-    """L2 as TESTING.md specifies it: 16 seeds x 5000 frames, batches of 100."""
+    """L2 at full length (docs/validation.md#level-5-long-run-stability): 16 seeds x 5000 frames,
+    batches of 100."""
     check_no_trend(*long_run_trend(seeds=16, frames=5000, batch=100))
 
 
 def test_drift_test_catches_a_feedback_loop():
     """Power check: over-weighting the history by 1.5 per frame feeds back through temporal and
-    spatial reuse (TESTING.md 3.3: runaway needs a gain above about 1.5); L2 must flag it."""
+    spatial reuse (docs/validation.md#level-5-long-run-stability); L2 must flag it."""
     with pytest.raises(AssertionError), np.errstate(all="ignore"):  # the mutant overflows to inf
         check_no_trend(*long_run_trend(seeds=8, frames=600, batch=50, mutation="temporal_overweight"))
 

@@ -1,4 +1,5 @@
-"""Slow tier: the ReSTIR DI stage-isolation matrix (TESTING.md 5.6, C0-C4 and C6) against the
+"""Slow tier: the ReSTIR DI stage-isolation matrix (docs/validation.md#level-3-stage-matrix, C1-C4)
+against the
 direct-only path tracer, with independent runs on both sides.
 
 Every configuration runs K = 64 independent runs (fresh seed and history each) of T = 8 frames

@@ -6,7 +6,8 @@ runs). Welch/t z-tests per channel at image, tile and pixel level with alpha = 1
 configuration (restir/validation/stats.py); a pass also needs the minimum detectable bias
 (80% power, image level) below the bound stated per test.
 
-- The emissive-cap sphere (TESTING.md A1): every non-emitting pixel has the same analytic value,
+- The emissive-cap sphere (A1, docs/validation.md#level-2-analytic-scenes-and-external-references):
+  every non-emitting pixel has the same analytic value,
   yet distances and cosines vary from pixel to pixel; exact reference, so MDBs of 0.2-1%.
 - The indirect room (light hidden from the camera and from most surfaces, glossy floor, block
   and wall): against `--method pt`, both sides noisy.
@@ -126,7 +127,8 @@ def test_indirect_room_matches_path_tracing(config):
     assert rep.mdb < 0.06
 
 
-# Power checks (TESTING.md 5.11) on the estimator: each mutant fails the test its unbiased build
+# Power checks (docs/validation.md#power-checks-the-mutation-table) on the estimator: each mutant
+# fails the test its unbiased build
 # passes. (The shift mutants are caught by tests/unit/test_pt_shifts.py and
 # test_pt_shift_integrals.py, BSDF-twice among them; here it runs in the slow tier.)
 @pytest.mark.parametrize("mutation", ["m_per_event", pytest.param("bsdf_twice", marks=SLOW)])
@@ -225,7 +227,8 @@ def test_mcmc_without_the_weight_update_is_caught(scene):
 
 
 # Reciprocal neighbours (spatial.reciprocal) change which pixels are reused, not the estimator: the
-# same configurations and seeds with independent neighbours, run by run (TESTING.md 5.7). The
+# same configurations and seeds with independent neighbours, run by run
+# (docs/validation.md#level-4-invariance-tests). The
 # glossy box's paired difference resolves 0.5-0.7% (64 runs); the room's is heavy-tailed (1.9% at
 # 192 runs), so it runs in the slow tier.
 @pytest.mark.parametrize("base", ["defaults", "spatial-k8-rounds-2"])

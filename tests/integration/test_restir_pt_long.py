@@ -1,4 +1,5 @@
-"""ReSTIR PT over frames and parameters (TESTING.md 5.7, 5.8), on the emissive-cap sphere (every
+"""ReSTIR PT over frames and parameters (docs/validation.md#level-4-invariance-tests,
+docs/validation.md#level-5-long-run-stability), on the emissive-cap sphere (every
 non-emitting pixel has the same analytic value; exact reference).
 
 - I1-I3 (I2, I3 in the slow tier): image means over independent runs for neighbour counts k, temporal caps and spatial

@@ -1,4 +1,5 @@
-"""Slow tier: the ReSTIR PT stage-isolation matrix (TESTING.md 5.6) against the path tracer at
+"""Slow tier: the ReSTIR PT stage-isolation matrix (docs/validation.md#level-3-stage-matrix) against
+the path tracer at
 the same max_depth, with independent runs on both sides (restir.validation.IndependentRuns).
 
 Every configuration: K independent runs of T frames at 32x32, its statistic per run the run's
@@ -24,7 +25,8 @@ NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
 TEMPORAL = {"spatial.rounds": 0}
 # The defaults until 2026-12-06 (the official ones, with independent neighbours): every cell but
-# the defaults' own keeps them, so the verdicts in VALIDATION.md stay those of the configuration
+# the defaults' own keeps them, so the verdicts in
+# docs/validation.md#results-restir-pt-stages-and-options stay those of the configuration
 # each cell ran.
 OFFICIAL = {"direct": "restir-di", "temporal.cap": 20.0, "spatial.reciprocal": False, "emission.rays": 1}
 # The emission seen directly from one camera ray a sample, the default until emission.rays became

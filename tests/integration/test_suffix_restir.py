@@ -1,6 +1,6 @@
 """Suffix ReSTIR (docs/suffix_restir.md) against exact values and the path tracer, over independent
 runs (restir.validation.IndependentRuns: a run's statistic is its average image over T frames),
-and its mutants (TESTING.md 5.11).
+and its mutants (docs/validation.md#power-checks-the-mutation-table).
 
 - The emissive-cap sphere (A1: every non-emitting pixel has the same analytic value), 16x16,
   max_depth 5, K = 32 runs x T = 8 frames: defaults (direct=pt), the ReSTIR DI component, one

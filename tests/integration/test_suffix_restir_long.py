@@ -1,4 +1,5 @@
-"""Suffix ReSTIR over frames and parameters (TESTING.md 5.7 I6, 5.8), on the emissive-cap sphere
+"""Suffix ReSTIR over frames and parameters (I6 of docs/validation.md#level-4-invariance-tests;
+docs/validation.md#level-5-long-run-stability), on the emissive-cap sphere
 (exact reference), with the harness of the ReSTIR PT long tests (test_restir_pt_long.py):
 
 - I6: image means over independent runs for the gather's prefixes N, suffixes M, search radius

@@ -1,4 +1,5 @@
-"""Slow tier: the Suffix ReSTIR stage matrix (TESTING.md 5.6, C5) against the path tracer at the same
+"""Slow tier: the Suffix ReSTIR stage matrix (docs/validation.md#level-3-stage-matrix, C5) against
+the path tracer at the same
 max_depth, with independent runs on both sides, on the scenes of the ReSTIR PT matrix and with its
 runs per scene (test_restir_pt_matrix.py: K runs x T frames at 32x32, the path tracer's reference
 rendered once per scene and camera motion; the emissive-cap sphere against its exact value).
@@ -21,7 +22,8 @@ from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 # The official prototype's direct light, the ReSTIR DI component: the default until 2026-12-06, when
 # direct=pt became it (docs/changelog.md#suffix-restir-directpt). The cells that test one
-# stage or option keep it, as they were validated (VALIDATION.md); the defaults' cells (C5-all,
+# stage or option keep it, as they were validated
+# (docs/validation.md#results-suffix-restir-stages-and-options); the defaults' cells (C5-all,
 # -orbit, -dolly, -centre, C5-all-N128) take direct=pt, and C5-official is the old C5-all.
 OFFICIAL = {"direct": "restir-di", "emission.rays": 1}
 # The emission seen directly from one camera ray a sample, the default until emission.rays became

@@ -350,7 +350,8 @@ _round_trip_kernels = {}
 
 def round_trip_kernel(mutation: str = "none", inlined: bool = False):
     """The test kernel over the shipped shift (its out-of-line build, or with `inlined` the build
-    the temporal and spatial passes call), or over a mutant's (TESTING.md 5.11)."""
+    the temporal and spatial passes call), or over a mutant's
+    (docs/validation.md#power-checks-the-mutation-table)."""
     key = (mutation, inlined)
     if key not in _round_trip_kernels:  # make_shift returns the shipped builds for "none"
         _round_trip_kernels[key] = make_round_trip_kernel(make_shift(mutation, inline=inlined))

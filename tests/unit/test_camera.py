@@ -142,7 +142,8 @@ def test_emission_rays_is_refused_out_of_range():
     ("emission_lattice_fixed", {"emission.adaptive": "false"}),
     ("emission_rays_by_own_ray", {})])
 def test_the_emission_rays_mutations_are_caught(mutation, settings):
-    """The mutations of emission.rays (TESTING.md 5.11), which the test above must fail:
+    """The mutations of emission.rays (docs/validation.md#power-checks-the-mutation-table), which
+    the test above must fail:
     emission_lattice_fixed, the extra rays at the lattice's points not shifted by the sample's
     position, so each always samples the same spot of the pixel (measured: z = -244); and
     emission_rays_by_own_ray, the four rays traced where the sample's own ray saw the light rather

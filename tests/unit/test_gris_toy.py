@@ -1,4 +1,5 @@
-"""U2 (TESTING.md 5.4): generalized RIS with shifts, MIS, temporal history, caps and spatial
+"""U2 (docs/validation.md#level-1-toy-statistical-tests): generalized RIS with shifts, MIS, temporal
+history, caps and spatial
 reuse on nine 1-D "pixels", using the production resampling core (restir/resampling).
 
 Pixel i integrates f_i(x) = s_i f(phi_i(x)) phi_i'(x) on [0, 1] with phi_i(x) = x^a_i, so
@@ -288,7 +289,8 @@ def test_gris_is_unbiased(name, failures, device):
     print(f"{name} failures={failures}: max|z| {np.abs(z).max():.2f} (crit {crit:.2f}), MDB {100 * mdb.max():.2f}%")
     assert np.all(np.abs(z) < crit), np.round(z, 1)
     assert mdb.max() < 0.03
-    # Reuse must not be silently inert (TESTING.md pitfall 14): it lowers the variance (less so
+    # Reuse must not be silently inert (docs/validation.md#level-1-toy-statistical-tests): it lowers
+    # the variance (less so
     # in the failures variant, where shifts fail on a set and half the samples are zero).
     factor = 0.9 if failures else 0.75
     if cfg.get("k"):
@@ -313,6 +315,7 @@ def test_gris_is_unbiased_slow(name, failures, device):
     ("drop_invalid", dict(k=4, rounds=1)),
 ])
 def test_mutations_are_detected(mutation, config, device):
-    """Power check (TESTING.md 5.11): defects A1 and A3 must fail the same test."""
+    """Power check (docs/validation.md#power-checks-the-mutation-table): defects A1 and A3 must fail
+    the same test."""
     z, crit, _, _ = run_toy(failures=True, mutation=mutation, n=N_FAST, device=device, **config)
     assert np.abs(z).max() > crit, f"{mutation} not detected: max|z| {np.abs(z).max():.2f}"

@@ -1,4 +1,5 @@
-"""D5 (TESTING.md 5.3): the shifts' analytic Jacobians against finite-difference Jacobians of the
+"""D5 (docs/validation.md#level-0-deterministic-property-tests): the shifts' analytic Jacobians
+against finite-difference Jacobians of the
 shift in primary sample space (PSS), on the base paths of real scenes.
 
 A path with a reconnection (rc) vertex z reaches z from rcPrev x_{r-1} with the numbers
@@ -101,7 +102,8 @@ def test_shift_jacobian_matches_finite_differences(name, shift, device):
 
 @pytest.mark.parametrize("mutation", ["drop_rc_pdf", "invert_jacobian"])
 def test_jacobian_mutants_fail_finite_differences(mutation):
-    """TESTING.md 5.11: J without the pdf ratio at z, and 1/J, disagree with the finite differences
+    """docs/validation.md#power-checks-the-mutation-table: J without the pdf ratio at z, and 1/J,
+    disagree with the finite differences
     on the paths they change (glossy z for the first)."""
     o = well_conditioned(fd_jacobians("indirect-room", "hybrid", mutation))
     rel = relative_errors(o)

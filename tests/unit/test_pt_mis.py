@@ -1,4 +1,5 @@
-"""D1 at stage level (TESTING.md 5.3): the MIS weights ReSTIR PT's reuse passes give one path y
+"""D1 at stage level (docs/validation.md#level-0-deterministic-property-tests): the MIS weights
+ReSTIR PT's reuse passes give one path y
 sum to 1 over every technique that can produce it, with real shifts on the base paths of real
 scenes, computed by the passes' own functions (reuse_pair.py's shifts and densities, the
 pairwise accumulator and the Talbot weight of resampling/mis.py).

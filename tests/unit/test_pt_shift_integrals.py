@@ -12,7 +12,7 @@ shift succeeds). Summed over all pixels of a frame, both sides are compared over
 frames with a Welch z-test. A wrong J (inverted, or without z's pdf ratio), a BSDF applied twice,
 destination criteria that are not checked (the two supports differ) or a replay that reads
 other random numbers all break the equality; the test is run on the shipped shift and on each
-of those mutants (TESTING.md 5.11), which must be caught.
+of those mutants (docs/validation.md#power-checks-the-mutation-table), which must be caught.
 
 False-failure rate: |z| > 4.4 per configuration, about 1e-5 for a normal statistic; a pass also
 needs the minimum detectable bias (4.4 standard errors, relative) below 5%.

@@ -1,4 +1,5 @@
-"""Resampling core, Level 0 (D1, D7) and Level 1 (U1) of TESTING.md.
+"""Resampling core: D1, D7 (docs/validation.md#level-0-deterministic-property-tests) and U1
+(docs/validation.md#level-1-toy-statistical-tests).
 
 Chi-square and z tests here use alpha = 1e-4 per test (Bonferroni inside a test where noted).
 """
@@ -134,7 +135,8 @@ def test_mis_weights_sum_to_one(kind, device):
 
 
 def test_constant_1_over_M_is_not_a_partition_of_unity(device):
-    """Negative control: ignoring which techniques can produce y breaks (iii) (TESTING.md 5.0)."""
+    """Negative control: ignoring which techniques can produce y breaks condition 3
+    (docs/validation.md#what-has-to-hold)."""
     s, nz = mis_sums(MIS_CONSTANT_BIASED, device)
     assert np.mean(np.abs(s[nz] - 1) > 1e-3) > 0.3
 

@@ -51,7 +51,8 @@ def test_suffix_jacobian_matches_finite_differences(shift, device):
 
 @pytest.mark.parametrize("mutation", ["rc_index_at_prefix_length", "suffix_seed_not_reset", "prefix_thp_in_target"])
 def test_suffix_mutants_break_identity(mutation):
-    """TESTING.md 5.11: the rc index recorded at the prefix length (prefixes ending at x3, so that
+    """docs/validation.md#power-checks-the-mutation-table: the rc index recorded at the prefix
+    length (prefixes ending at x3, so that
     it differs from the suffix's own index), the replay seed not restarted at the prefix end, and
     the prefix's throughput in the suffix's target each make the identity shift fail."""
     integ, p, gb, res = suffixes("builtin:cornell-box-glossy", "hybrid", 48,

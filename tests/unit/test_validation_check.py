@@ -69,7 +69,8 @@ def test_harness_refuses_fault_injection():
 
 
 def test_skewed_tiles_are_not_judged():
-    """TESTING.md 5.2's skew guard at the tile level: with heavy-tailed batch means (lognormal,
+    """The skew guard at the tile level
+    (docs/validation.md#heavy-tails-the-skew-and-kurtosis-guards): with heavy-tailed batch means (lognormal,
     sigma 2: tile skew far above 1) no tile is judged and the tile level is inconclusive, while
     normal batches are judged (and a 10% bias in one tile of them fails)."""
     from restir.validation.stats import ZTestReport

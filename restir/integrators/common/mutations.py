@@ -1,4 +1,5 @@
-"""A method's fault injections for the mutation tests (TESTING.md 5.11), in one registry of one
+"""A method's fault injections for the mutation tests
+(docs/validation.md#power-checks-the-mutation-table), in one registry of one
 shape for every method: each name builds the method's stage kernels (in the method's own order)
 with that defect, once, on first use; "none" and the mutations of the pipeline rather than of a
 kernel (a race, a biased combination let through the checks) run the shipped kernels. The

@@ -22,7 +22,7 @@ PT_UNBOUNDED_DEPTH = 64  # max_depth -1 renders at this depth, with a note
 def summarize_shifts(shift_counts: dict) -> tuple[dict, list]:
     """Per pass, the shifts of reconnections (paths with an rc vertex) and pure replays: tried,
     succeeded and the success rate; and the passes whose shifts never succeeded ("reuse dead":
-    reuse that does nothing is reported, not passed; TESTING.md 5.6)."""
+    reuse that does nothing is reported, not passed; docs/validation.md#always-on-diagnostics)."""
     shifts, dead = {}, []
     for stage, c in shift_counts.items():
         kinds = {}
@@ -193,7 +193,8 @@ class PathReuseIntegrator(Integrator):
 
     def stats(self) -> dict:
         """The base stats (ReSTIR DI's rays among them: the component shares stage_rays) and the
-        reuse diagnostics (TESTING.md 5.12): the shifts per pass and the reuse-dead passes."""
+        reuse diagnostics (docs/validation.md#always-on-diagnostics): the shifts per pass and the
+        reuse-dead passes."""
         out = super().stats()
         out["shifts"], out["reuse_dead"] = summarize_shifts(self.shift_counts)
         return out

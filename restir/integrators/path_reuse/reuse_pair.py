@@ -10,7 +10,8 @@ spatial passes (and the stage-level D1 test) compute them.
 - `shift_out`: the canonical sample x_c shifted into i's domain, for the canonical weight:
   d_i(x_c) = p_hat_i(T x_c) * J * M_i.
 A failed shift (or an input without a path) leaves its densities 0: the technique stays in the
-set with density 0 (TESTING.md 5.0 (v)). M_i is the confidence the pass uses for i (the history's
+set with density 0 (docs/validation.md#what-has-to-hold, condition 5). M_i is the confidence the
+pass uses for i (the history's
 is capped before any weight: cap_history).
 
 On top of them, the resampling both kinds of pass do (`Reuse`: the RIS state, the pairwise MIS

@@ -25,8 +25,9 @@ hybrid shift is then no bijection, 6 item 9), when z is occluded or behind a sur
 the result is not a finite positive number. A failed shift is still an input: its M counts and
 its MIS density is 0 (3.4).
 
-`make_shift` builds fault-injected variants for the mutation tests (TESTING.md 5.11), each in a
-Warp module of its own; the shipped shift (`shift_path`) is built with none.
+`make_shift` builds fault-injected variants for the mutation tests
+(docs/validation.md#power-checks-the-mutation-table), each in a Warp module of its own; the shipped
+shift (`shift_path`) is built with none.
 """
 import warp as wp
 

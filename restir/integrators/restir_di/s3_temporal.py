@@ -52,7 +52,8 @@ _built: dict = {}
 def make_temporal_reuse(skip_zero_canonical: bool = False, overweight_history: bool = False):
     """The stage's work for one pixel as a function: (reservoir, events) from the pixel's reservoir
     c so far and its shading point sc. The arguments build fault-injected variants for the
-    mutation tests (TESTING.md 5.11: A1, and a 1.5x history weight, a feedback loop), compiled
+    mutation tests (docs/validation.md#power-checks-the-mutation-table: A1, and a 1.5x history
+    weight, a feedback loop), compiled
     into modules of their own; the shipped function is built with neither."""
     if (skip_zero_canonical, overweight_history) in _built:
         return _built[skip_zero_canonical, overweight_history]

@@ -30,7 +30,8 @@ CANONICAL = wp.constant(1000)  # the canonical input's index in the selection (n
 
 def make_spatial_kernel(skip_zero_canonical: bool = False, drop_empty_neighbors: bool = False):
     """The spatial kernel; the arguments build fault-injected variants for the mutation tests
-    (TESTING.md 5.11: A1, and A3, neighbours holding no sample excluded from k). Those variants
+    (docs/validation.md#power-checks-the-mutation-table: A1, and A3, neighbours holding no sample
+    excluded from k). Those variants
     are compiled into modules of their own; the shipped kernel is built with neither."""
     mutated = skip_zero_canonical or drop_empty_neighbors
 

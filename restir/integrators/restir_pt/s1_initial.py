@@ -32,8 +32,8 @@ def make_initial_reservoir(m_per_event: bool = False):
     """The stage's work for one pixel as a function, (reservoir, events, the summed events at x_0
     of direct=nee) from its shading point:
     what the split kernel stores and the fused kernel keeps in registers. m_per_event builds the
-    mutation that counts M per streamed event (and divides W by it), the defect TESTING.md 5.11
-    lists; the shipped function is built without it."""
+    mutation that counts M per streamed event (and divides W by it), the defect
+    docs/validation.md#power-checks-the-mutation-table lists; the shipped function is built without it."""
     if m_per_event in _built:
         return _built[m_per_event]
 

@@ -18,7 +18,8 @@ from a stream no pixel's samples touch, so the techniques are fixed before any s
 thread makes a pair's two shifts and updates both pixels: k shifts per pixel instead of 2k.
 One launch per neighbour j: every pixel is in exactly one pair per launch and the pair's lower
 pixel does the work, so no pixel is written twice in a launch and the threads' order cannot
-matter (TESTING.md R2). Between launches a pixel's resampling state is the sample chosen so far
+matter (docs/validation.md#level-7-races-and-determinism). Between launches a pixel's resampling
+state is the sample chosen so far
 (in reservoirs_out) and `sums` (w_sum, M, V): the sample radiance's buffer, which the shade stage
 fills only after this pass. The canonical input's weight m_c = 1 + sum_j share_j
 (resampling/mis.py) is known only after the last neighbour, so the canonical sample is streamed
@@ -246,7 +247,8 @@ def make_reciprocal_spatial_kernel(shift=SHIFT_INLINED, drop_failed: bool = Fals
                 q_uses = q_uses and into_q.t.valid != 0
                 n_uses = n_uses and into_n.t.valid != 0
         # each shift's rays and outcome are counted once, at the pixel it moved a sample into; a
-        # failure counts where the shifted sample was an input (TESTING.md 5.12)
+        # failure counts where the shifted sample was an input
+        # (docs/validation.md#always-on-diagnostics)
         st_q.tl = tally(ShiftTally(), c_n, into_q.t, into_q.tried, wp.where(q_uses, 1, 0))
         st_n.tl = tally(ShiftTally(), c_q, into_n.t, into_n.tried, wp.where(n_uses, 1, 0))
         key_n = rng_key(params.seed, params.frame, stage, wp.uint32(n))

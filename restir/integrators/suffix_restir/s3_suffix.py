@@ -68,7 +68,8 @@ def new_suffix(scene: SceneDevice, params: SRParams, d: Domain, pixel: int) -> N
 
 
 def make_suffix_kernel(mutation: str = "none"):
-    """The suffix kernel; a mutation builds a fault-injected variant (TESTING.md 5.11):
+    """The suffix kernel; a mutation builds a fault-injected variant
+    (docs/validation.md#power-checks-the-mutation-table):
     rc_index_at_prefix_length (the rc vertex recorded at index P, as if counted from the primary
     hit: the defect S2), suffix_seed_not_reset (the replay seed stored is the prefix's, not the one
     the suffix was traced with: replay does not restart at x_P, 6 item 11), prefix_thp_in_target

@@ -75,7 +75,8 @@ class NeighborTerm:
 def make_gather(shift=shift_path, module=None, mutation: str = "none"):
     """The gather's weights and kernel over a shift, as a namespace (`neighbor_term`,
     `canonical_weight`, `kernel`): the tests evaluate the kernel's own weight functions. A mutation
-    builds a fault-injected variant (TESTING.md 5.11): canonical_not_times_n (the canonical suffix
+    builds a fault-injected variant (docs/validation.md#power-checks-the-mutation-table):
+    canonical_not_times_n (the canonical suffix
     of prefix 0 not weighted by N: the defect S4), neighbors_over_k1_squared (the neighbour terms
     divided by (V + 1)^2, S4), drop_empty_slots (slots whose reservoir holds no suffix left out of
     the technique set: A3)."""
