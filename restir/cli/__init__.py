@@ -1,4 +1,4 @@
-"""Command line: `restir COMMAND ...` (the contract in DESIGN.md "Command line"), one module per
+"""Command line: `restir COMMAND ...` (the contract in docs/reference/cli.md), one module per
 command (render, validate, compare, sweep, info: each `add_parser(sub)` and `run(args)`) and
 common.py for what they share.
 

@@ -20,7 +20,8 @@ Lobes (types.py LOBE_*): every sample reports the lobe it chose; `bsdf_eval_lobe
 `bsdf_pdf_lobes` restrict eval and pdf to a mask of lobes (the pdf including the probability of
 choosing those lobes, so restricted pdfs over a partition of the lobes sum to `bsdf_pdf`).
 `lobe_is_rough` and `bsdf_has_rough_component` classify lobes for path reuse: a reconnection
-needs rough lobes at both ends (ALGORITHMS.md 2.4, 3.1).
+needs rough lobes at both ends (docs/theory/restir_pt.md#the-lobe-separated-path-bsdf and
+#the-reconnection-vertex).
 """
 import warp as wp
 

@@ -118,7 +118,8 @@ DI_MAX_NEIGHBORS = 32
 # Base paths: one key per (pixel, sample, candidate) path (rng_key of STAGE_PT_PATHS combined with
 # sample * candidates + candidate), stored in the reservoir as the path's replay seed; bounce b
 # uses the path tracer's layout at b * DIMS_PER_BOUNCE. Replay re-reads the same (key, dim) pairs,
-# so it consumes exactly the numbers the base path did, whatever it skips (ALGORITHMS.md 6 item 10).
+# so it consumes exactly the numbers the base path did, whatever it skips
+# (docs/theory/restir_pt.md#random-replay).
 # RIS selections: the same per-path key in STAGE_PT_RIS, dimension 2 * (vertex index) + {0: the
 # NEE event there, 1: the BSDF-sampled emission found from there}.
 PT_RIS_DIMS_PER_VERTEX = wp.constant(2)

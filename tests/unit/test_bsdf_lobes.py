@@ -1,6 +1,6 @@
 """Lobes of the BSDFs: restricted eval/pdf partition the full ones, sampled lobes are chosen with
 the probabilities the restricted pdfs integrate to, and the roughness classification that picks
-reconnection vertices (ALGORITHMS.md 2.4, 3.1).
+reconnection vertices (docs/theory/restir_pt.md#the-lobe-separated-path-bsdf and #the-reconnection-vertex).
 
 The frequency test is a z-test per (material, lobe) at alpha = 1e-3 (Bonferroni over the cells):
 each lobe's sampling frequency against the integral of its restricted pdf over the sphere,

@@ -143,7 +143,7 @@ def temporal_merge(cfg: ToyConfig, i: int, q: int, cur: ToyReservoir, prev: ToyR
 
 @wp.func
 def spatial_merge(cfg: ToyConfig, i: int, base: int, src: wp.array(dtype=ToyReservoir), key: wp.uint32) -> ToyReservoir:
-    """Pairwise MIS over the pixel's own reservoir and its k neighbours (ALGORITHMS.md 4.3), with
+    """Pairwise MIS over the pixel's own reservoir and its k neighbours (docs/theory/mis.md#pairwise-mis), with
     the production accumulator (pairwise_init / pairwise_add_neighbor / pairwise_normalization)."""
     c = src[base + i]
     if cfg.mut_skip_zero_canonical != 0 and f_pixel(i, c.y, cfg.failures) * c.W == 0.0:

@@ -1,6 +1,6 @@
 """ReSTIR PT shifts, deterministic properties (D2, D3 of
 docs/validation.md#level-0-deterministic-property-tests;
-ALGORITHMS.md 3), on the base
+docs/theory/restir_pt.md#the-hybrid-shift), on the base
 paths of real scenes, calling the production shift (path_reuse/shift.py) from a test kernel:
 
 - identity (D2): a path shifted into its own domain is itself (F within 1e-3 relative) with J = 1;

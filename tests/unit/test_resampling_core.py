@@ -56,7 +56,7 @@ def random_technique_sets(n, seed=17):
 
 def test_pairwise_weights_of_the_stage_accumulator(device):
     """D1 for pairwise MIS as the stages compute it (resampling/mis.py's accumulator), against
-    the weights written out from their definition (ALGORITHMS.md 4.3) in float64 here: the
+    the weights written out from their definition (docs/theory/mis.md#pairwise-mis) in float64 here: the
     neighbour weight d_i / (d_i + d_c / k), the canonical weight 1 + sum of (d_c / k) / (d_i + d_c / k)
     (a full 1 where d_i = 0), the normalisation V + 1 with V the neighbours valid by geometry, and
     for every y that some technique can produce, weights / (V + 1) summing to 1."""

@@ -1,4 +1,5 @@
-"""The base path tracer of ReSTIR PT with streaming RIS over path lengths (ALGORITHMS.md 2).
+"""The base path tracer of ReSTIR PT with streaming RIS over path lengths
+(docs/theory/restir_pt.md#initial-resampling-over-path-lengths).
 
 One base path starts at a pixel's primary hit x_0 and is traced with the device steps every
 method shares (device/path_steps.py: light connection, emission MIS weight, scattering), with
@@ -7,7 +8,7 @@ the lobe-separated path BSDF. Every event it makes is a candidate: NEE at x_k, a
 owns direct light at x_0, 0 when ReSTIR PT owns every path). Each event lives in its own
 sub-domain (its length and end type), so the path's candidates are resampled with unit MIS
 weights, w = p_hat(F) (p_source = 1 in primary sample space; no Russian roulette), and the
-path counts M = 1 however many events it has (6 item 5). With C paths per pixel each event is
+path counts M = 1 however many events it has. With C paths per pixel each event is
 weighted 1/C and M = C.
 
 With direct=nee (params.direct_nee) the events at x_0 are summed into `direct` instead, as the

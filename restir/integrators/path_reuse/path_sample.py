@@ -5,7 +5,7 @@ drew is rng_uniform(seed, dim) at a fixed dimension) together with which of its 
 chosen: path length (the last scattering vertex; vertex index 0 is the primary hit x1) and end
 type (a light-sampled connection, NEE, or emission found by BSDF sampling). Its integrand in
 its own domain is F = f / p in primary sample space, the NEE/BSDF MIS weight included; the
-target is p_hat = luminance(F) (ALGORITHMS.md 0).
+target is p_hat = luminance(F) (docs/theory/restir_pt.md#primary-sample-space).
 
 For the reconnection shift it also keeps the reconnection (rc) vertex z, which every shifted
 path shares, with what the path does after it, and the source-side terms of the Jacobian:
@@ -23,13 +23,14 @@ path shares, with what the path does after it, and the source-side terms of the 
 | rc_jac    | 8     | source terms of J: (G(rcPrev, z) * p(rcPrev -> z), p(z -> next)), the latter 1 where it does not apply |
 | light_pdf | 4     | light pdf of the path's end, in the measure the shift needs (below) |
 
-Total 76 bytes (ALGORITHMS.md 1.1: the official 88). `rc_L` by case (1.3): NEE at z: Le of the
+Total 76 bytes (the official implementation's is 88; docs/theory/restir_pt.md#what-a-path-sample-stores).
+`rc_L` by case: NEE at z: Le of the
 light (its MIS weight is recomputed after a shift, so it is not in rc_L); emission found from z:
 Le; a path continuing past z: the product of what follows z's own scatter (MIS weight
 included); z the emitter itself (an "escape" rc vertex): unused (Le is re-read from the
 triangle). `light_pdf`: the solid-angle light pdf at z when the end's MIS is taken at z (z does
 not move, so it is fixed); the area-measure pdf of the emitter when z is that emitter, converted
-with the destination's geometry after a shift (6 item 14); the environment's pdf of rc_wi for
+with the destination's geometry after a shift; the environment's pdf of rc_wi for
 an environment rc (fixed direction).
 """
 import warp as wp

@@ -1,19 +1,21 @@
 """Which vertex of a path is its reconnection (rc) vertex, and the lobe-separated path BSDF.
 
-Hybrid shift (ALGORITHMS.md 3.1): the rc vertex is the *first* vertex x_k (vertex index k >= 1,
-the primary hit being 0) such that the segment x_{k-1} x_k is at least `near_distance` long, the
-lobe sampled at x_{k-1} was rough, and x_k is rough: for a path that continues from x_k, the
-lobe it samples there is rough; for a path ending with NEE at x_k, x_k has a rough component.
-Emission found by BSDF sampling can itself be the rc vertex (an "escape" vertex) when the lobe
-that found it was rough and it is far enough (the environment is always far).
-Pure reconnection: the rc vertex is always x_1 (x2 in the paper's numbering). Pure replay: none.
+Hybrid shift (docs/theory/restir_pt.md#the-reconnection-vertex): the rc vertex is the *first* vertex
+x_k (vertex index k >= 1, the primary hit being 0) such that the segment x_{k-1} x_k is at least
+`near_distance` long, the lobe sampled at x_{k-1} was rough, and x_k is rough: for a path that
+continues from x_k, the lobe it samples there is rough; for a path ending with NEE at x_k, x_k has a
+rough component. Emission found by BSDF sampling can itself be the rc vertex (an "escape" vertex)
+when the lobe that found it was rough and it is far enough (the environment is always far). Pure
+reconnection: the rc vertex is always x_1 (x2 in the paper's numbering). Pure replay: none.
 
 The same functions decide on the base path and, during a shift, on the destination path: the
-shift is a bijection only when both sides pick the same index (6 item 9).
+shift is a bijection only when both sides pick the same index
+(docs/theory/restir_pt.md#invertibility-and-failed-shifts).
 
-Lobe-separated path BSDF (2.4): a path's throughput at a vertex is the sampled lobe's
-f / p (p including the lobe-selection probability); MIS weights use the all-lobe pdf. Only
-roughplastic has two smooth lobes; for every other material the two coincide.
+Lobe-separated path BSDF (docs/theory/restir_pt.md#the-lobe-separated-path-bsdf): a path's
+throughput at a vertex is the sampled lobe's f / p (p including the lobe-selection probability); MIS
+weights use the all-lobe pdf. Only roughplastic has two smooth lobes; for every other material the
+two coincide.
 """
 import warp as wp
 

@@ -1,29 +1,32 @@
 """The shift of a path sample into another pixel's domain: (source path, destination domain: a
-primary hit, or a prefix end) -> (the path in the destination, its Jacobian J, valid). One
-function for every shift kind and both directions of every MIS weight (ALGORITHMS.md 3.2-3.4).
+primary hit, or a prefix end) -> (the path in the destination, its Jacobian J, valid). One function
+for every shift kind and both directions of every MIS weight
+(docs/theory/restir_pt.md#the-hybrid-shift).
 
-The destination path replays the source's random numbers from the destination's start vertex
-(the same (seed, dim) pairs, so the same numbers whatever the replay skips: 6 item 10) up to
-rcPrev, the vertex before the rc vertex z; then reconnects to z, which both paths share, and
-keeps everything after z. A path without an rc vertex is replayed to its end (J = 1).
+The destination path replays the source's random numbers from the destination's start vertex (the
+same (seed, dim) pairs, so the same numbers whatever the replay skips:
+docs/theory/restir_pt.md#random-replay) up to rcPrev, the vertex before the rc vertex z; then
+reconnects to z, which both paths share, and keeps everything after z. A path without an rc vertex
+is replayed to its end (J = 1).
 
-J is the primary-sample-space Jacobian in the "destination from source" sense: a source sample
-x with target p_hat_src(x) has density p_hat_src(x) / J seen from the destination, and its
-resampling weight there is m * p_hat_dst(y) * J * W (6 items 1-2):
+J is the primary-sample-space Jacobian in the "destination from source" sense: a source sample x
+with target p_hat_src(x) has density p_hat_src(x) / J seen from the destination, and its resampling
+weight there is m * p_hat_dst(y) * J * W (docs/theory/restir_pt.md#the-reconnection-jacobian):
 
     J = [G(y', z) p_l(y' -> z) p_l(z -> next | y')] / [the same at the source]
 
 with G = |cos theta_z| / d^2 and p_l single-lobe pdfs; the z factor is left out where z does not
 scatter (NEE at z, z an emitter; the environment has no G). The source terms come from the
-record (rc_jac); the returned record carries the destination's (6 item 3).
+record (rc_jac); the returned record carries the destination's
+(docs/theory/restir_pt.md#what-a-path-sample-stores).
 
 The shift fails (valid = 0, J = 0) when the path is longer than the destination domain holds
-(params.max_depth: the same for every ReSTIR PT pixel, max_depth - P for a suffix domain of
-Suffix ReSTIR), when the replay does not reach rcPrev, when the destination
-path would pick a different rc vertex (an earlier vertex qualifies, or rcPrev/z do not: the
-hybrid shift is then no bijection, 6 item 9), when z is occluded or behind a surface, and when
-the result is not a finite positive number. A failed shift is still an input: its M counts and
-its MIS density is 0 (3.4).
+(params.max_depth: the same for every ReSTIR PT pixel, max_depth - P for a suffix domain of Suffix
+ReSTIR), when the replay does not reach rcPrev, when the destination path would pick a different rc
+vertex (an earlier vertex qualifies, or rcPrev/z do not: the hybrid shift is then no bijection:
+docs/theory/restir_pt.md#invertibility-and-failed-shifts), when z is occluded or behind a surface,
+and when the result is not a finite positive number. A failed shift is still an input: its M counts
+and its MIS density is 0 (docs/theory/gris.md#when-a-shift-fails).
 
 `make_shift` builds fault-injected variants for the mutation tests
 (docs/validation.md#power-checks-the-mutation-table), each in a Warp module of its own; the shipped
@@ -242,7 +245,8 @@ def make_shift(mutation: str = "none", inline: bool = False):
             w_y = e.f / e.p
             if kind == RC_EMITTER:
                 Le = triangle_emission(scene, r.rc_tri, z.ns, -w1)
-                # the light pdf from y, converted from the stored area measure (6 item 14)
+                # the light pdf from y, converted from the stored area measure
+                # (docs/theory/restir_pt.md#what-a-path-sample-stores)
                 mis = emission_mis_weight(0, bsdf_pdf(y.mat, y.wi, wo_y), r.light_pdf * dist * dist / cos_z, 1,
                                           STRATEGY_MIS)
                 F = wp.cw_mul(w_y, Le) * mis

@@ -1,5 +1,6 @@
 """Stage 4, temporal reuse: the pixel's new reservoir with last frame's final reservoir where
-this pixel's primary hit was seen (generalized balance / Talbot MIS over the two; ALGORITHMS.md 4.2).
+this pixel's primary hit was seen (generalized balance / Talbot MIS over the two;
+docs/theory/restir_di.md#temporal-reuse).
 
 The current primary hit is projected into the previous camera; the previous pixel is the
 temporal technique if it is on screen, had a primary hit and is geometrically similar (a

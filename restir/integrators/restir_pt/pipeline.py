@@ -69,7 +69,8 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
 })
 
 
-# The official defaults (ALGORITHMS.md 4.6), with the spatial radius in pixels (scaled up above
+# The official defaults (docs/theory/restir_pt.md#defaults-the-official-implementation-and-this-project),
+# with the spatial radius in pixels (scaled up above
 # 1080 lines), but for two chosen by the denoised equal-time measurement
 # (docs/changelog.md#restir-pt-directpt-temporalcap5): direct light in the path reservoirs (direct=pt: 17-35% cheaper a
 # frame, 252 B per pixel) and a temporal cap of 5, not the official 20 (less correlated error);

@@ -1,5 +1,6 @@
 """Stage 1, trace and initial RIS: `candidates` base paths per pixel from its primary hit, every
-event of every path streamed into one reservoir (base_path.py; ALGORITHMS.md 2.2):
+event of every path streamed into one reservoir (base_path.py;
+docs/theory/restir_pt.md#initial-resampling-over-path-lengths):
 w = p_hat(F) / C per event, W = w_sum / p_hat(selected), M = C (one per traced path, never one
 per event). Pixels without a primary hit keep an empty reservoir of M = 0.
 

@@ -1,6 +1,6 @@
 """Stage 2, temporal reuse: the pixel's new reservoir with last frame's final reservoir where
 this pixel's primary hit was seen, by generalized balance (Talbot) MIS over the two techniques
-(ALGORITHMS.md 4.2). The previous confidence is capped to temporal_cap x the current one before
+(docs/theory/restir_pt.md#temporal-reuse). The previous confidence is capped to temporal_cap x the current one before
 any weight is computed (cap_history). Both samples are shifted: the current one into the
 previous domain (its density there, for its own weight) and the history's into this one.
 The previous domain is the previous primary hit seen by the previous camera, evaluated with the

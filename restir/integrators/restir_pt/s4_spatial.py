@@ -1,11 +1,11 @@
-"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (ALGORITHMS.md 4.3), in
+"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (docs/theory/restir_pt.md#spatial-reuse), in
 two forms that compute the same estimator over different neighbours.
 
 `spatial_kernel` (spatial.reciprocal=false; the official pass): k pixels drawn uniformly in a
 disk of `spatial_radius` pixels, kept when on screen, with a primary hit and geometrically
 similar (G-buffers only, never reservoir contents). For each, its sample is shifted here and this pixel's sample there (the
 canonical weight's density): two shifts, each a replay to rcPrev and one visibility ray (done
-inline: see s2_temporal.py). Own-domain targets are the stored integrands (4.7).
+inline: see s2_temporal.py). Own-domain targets are the stored integrands.
 Reads: scene, G-buffer, reservoirs_in. Writes: reservoirs_out (a different buffer: ping-pong),
 shifts, events.
 

@@ -1,4 +1,4 @@
-"""Suffix ReSTIR as a pipeline of stages (ALGORITHMS.md 5.4; docs/suffix_restir.md): primary hits,
+"""Suffix ReSTIR as a pipeline of stages (docs/theory/suffix_restir.md; docs/suffix_restir.md): primary hits,
 ReSTIR DI (direct light at the primary hit, unless direct=pt), prefix trace and temporal prefix
 reuse, the prefix search structure, suffix trace, suffix temporal and spatial reuse, final gather.
 
@@ -50,7 +50,8 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
 SPATIAL_RADIUS_1080 = 30.0
 
 
-# The official prototype's defaults (ALGORITHMS.md 5.10), the spatial radii in pixels (scaled up
+# The official prototype's defaults (docs/theory/suffix_restir.md#what-this-project-computes),
+# the spatial radii in pixels (scaled up
 # above 1080 lines), but for the direct light, chosen by the denoised equal-time measurement
 # (docs/changelog.md#suffix-restir-directpt): in the path reservoirs (direct=pt), not from the prototype's ReSTIR DI
 # component: frames 6-13% cheaper, level after the denoiser (within 4% either way over two seeds on
@@ -209,7 +210,8 @@ class SuffixReSTIR(PathReuseIntegrator):
         host = self.dscene.host
         lo, hi = host.bounds()
         ext = hi - lo
-        self.scene_radius = float(max(ext.min(), 1e-3 * ext.max()))  # CR's "sceneRadius": the smallest extent (6 item 20)
+        # the prototype's "sceneRadius": the smallest extent (docs/theory/suffix_restir.md#what-this-project-computes)
+        self.scene_radius = float(max(ext.min(), 1e-3 * ext.max()))
         self.far_point = wp.vec3(*(hi + 10.0 * (ext.max() + 1.0)))
         self.spread_angle = math.atan(2.0 * host.camera.tan_half()[1] / self.height)
 

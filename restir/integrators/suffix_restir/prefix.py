@@ -1,6 +1,6 @@
-"""Prefixes (ALGORITHMS.md 5.2, 5.6; docs/suffix_restir.md): the adaptive prefix-end rule, a
-prefix traced with its internal events, the prefix reservoir, and the prefix's shift to another
-pixel (temporal prefix reuse).
+"""Prefixes (docs/theory/suffix_restir.md#the-prefix-end and #prefix-resampling;
+docs/suffix_restir.md): the adaptive prefix-end rule, a prefix traced with its internal events, the
+prefix reservoir, and the prefix's shift to another pixel (temporal prefix reuse).
 
 Vertex 0 is the primary hit. A prefix ends at x_P, one vertex after the first bounce that samples
 a rough lobe, unless x_P is specular-only or reached over a segment of at most `short_segment`
@@ -29,10 +29,10 @@ from .params import SRParams
 
 @wp.func
 def prefix_ends_at(params: SRParams, k: int, rough_bounce: bool, mat: Material, dist: float) -> bool:
-    """x_k, reached from x_{k-1} over a segment of length dist by a lobe that was rough_bounce,
-    ends the prefix (5.2). Adaptive: the first rough bounce at or after min_prefix, unless x_k is
-    specular-only or the segment short (each rejection can be switched off); otherwise exactly
-    at min_prefix."""
+    """x_k, reached from x_{k-1} over a segment of length dist by a lobe that was rough_bounce, ends
+    the prefix (docs/theory/suffix_restir.md#the-prefix-end). Adaptive: the first rough bounce at or
+    after min_prefix, unless x_k is specular-only or the segment short (each rejection can be
+    switched off); otherwise exactly at min_prefix."""
     if k + 2 > params.pt.max_depth:
         return False
     if params.adaptive == 0:
@@ -200,7 +200,8 @@ def shift_prefix(scene: SceneDevice, params: SRParams, r: PrefixReservoir, end: 
     to r's end x_P (`end`). Fails when the replay breaks, when a replayed vertex would end the
     destination's prefix earlier, or when the destination does not end its prefix at x_P (lobe
     not rough there, segment too short, x_P occluded): the shift is then a bijection between the
-    prefixes ending at x_P in both pixels (6 item 9). J = [G p_l]_dst / [G p_l]_src (PSS)."""
+    prefixes ending at x_P in both pixels (docs/theory/suffix_restir.md#prefix-resampling).
+    J = [G p_l]_dst / [G p_l]_src (PSS)."""
     res = PrefixShift()
     if not has_prefix(r) or dst.valid == 0 or end.valid == 0:
         return res

@@ -1,5 +1,5 @@
-"""Stage "prefix": prefix generation and temporal reuse, the report's stage 1 (ALGORITHMS.md 5.4
-steps 1-3, 5.6), one kernel.
+"""Stage "prefix": prefix generation and temporal reuse, one kernel
+(docs/theory/suffix_restir.md#prefix-resampling).
 
 A fresh prefix from each pixel's primary hit (prefix.py): its reservoir (M = 1, W = 1 in primary
 sample space, target p_hat = luminance of its throughput) and its end. A pixel with a primary hit

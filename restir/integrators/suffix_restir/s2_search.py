@@ -1,6 +1,7 @@
-"""The prefix search structure (ALGORITHMS.md 5.9; docs/suffix_restir.md): one box per pixel
-around its resampled prefix end, and the query that finds a fresh prefix end's neighbours, over
-one of three structures (the same code on the CPU and CUDA, rebuilt every frame):
+"""The prefix search structure (docs/theory/suffix_restir.md#the-prefix-search;
+docs/suffix_restir.md): one box per pixel around its resampled prefix end, and the query that finds
+a fresh prefix end's neighbours, over one of three structures (the same code on the CPU and CUDA,
+rebuilt every frame):
 
 - `grid` (default): a hashed uniform grid over the box centres, sorted by cell, with the boxes
   copied into that order, so a query reads each cell's candidates as one contiguous run. Cells
@@ -14,11 +15,11 @@ one of three structures (the same code on the CPU and CUDA, rebuilt every frame)
 - `bvh`: Warp's BVH over the boxes (`wp.Bvh`), queried with the point's degenerate box.
 
 Both find the same pixels: those whose box contains the query point x and whose centre lies
-within the box's half-diagonal (|c - x|^2 < 3 r^2, 5.9), the M closest first, never one at
+within the box's half-diagonal (|c - x|^2 < 3 r^2), the M closest first, never one at
 distance exactly 0. A pixel's box has centre x_P and half-size r = box_scale x footprint
 (box_scale = the radius multiplier x the pixel spread angle: the ray cone of the path; or, with
 gather.radius_type=fixed, the multiplier x the scene's smallest extent over the larger image
-side, 5.9); pixels without a prefix end get an
+side); pixels without a prefix end get an
 empty box at a point far outside the scene. Which pixels are found depends on prefix ends only,
 never on suffix samples. (Measured costs: docs/changelog.md#suffix-restir-gathersearchgrid.)
 """

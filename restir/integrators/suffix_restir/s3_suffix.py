@@ -1,18 +1,18 @@
-"""Stage "suffix": suffix generation and temporal reuse, the report's stage 3 (ALGORITHMS.md 5.4
-steps 5-6, 5.5, 5.7), one kernel.
+"""Stage "suffix": suffix generation and temporal reuse, one kernel
+(docs/theory/suffix_restir.md#resampling-suffixes-conditioned-on-the-prefix).
 
 A new suffix at the pixel's resampled prefix end, traced and resampled as a ReSTIR PT base path
 whose start vertex is x_P: NEE at x_P first, then BSDF sampling, every event streamed
-(w = p_hat(F_s), M = 1 per suffix); the suffix's own key (its replay seed) restarts the numbers
-at x_P (6 item 11), and its throughput restarts at 1 there (6 item 12). A pixel without a prefix
-end keeps an empty reservoir of M = 0. With temporal reuse (and a previous frame) the new suffix,
-kept in registers, is then resampled with the previous frame's final suffix reservoir of the pixel
-that saw this primary hit: the two suffix domains are the two pixels' resampled prefix ends (this
-frame's, and the previous pixel's of the previous frame); each suffix is shifted into the other's
-domain (ReSTIR PT's shift from the prefix end, with the destination's length budget), generalized
-balance MIS over the two (pairwise with K = 1), the history's M capped at suffix_cap (absolute,
-5.8) before any weight. The history is a technique when the previous pixel had a primary hit like
-this one and a prefix end (geometry only).
+(w = p_hat(F_s), M = 1 per suffix); the suffix's own key (its replay seed) restarts the numbers at
+x_P, and its throughput restarts at 1 there (docs/theory/suffix_restir.md#prefixes-and-suffixes). A
+pixel without a prefix end keeps an empty reservoir of M = 0. With temporal reuse (and a previous
+frame) the new suffix, kept in registers, is then resampled with the previous frame's final suffix
+reservoir of the pixel that saw this primary hit: the two suffix domains are the two pixels'
+resampled prefix ends (this frame's, and the previous pixel's of the previous frame); each suffix is
+shifted into the other's domain (ReSTIR PT's shift from the prefix end, with the destination's
+length budget), generalized balance MIS over the two (pairwise with K = 1), the history's M capped
+at suffix_cap (absolute) before any weight. The history is a technique when the previous pixel had a
+primary hit like this one and a prefix end (geometry only).
 Reads: scene, G-buffers (this frame's, previous), previous camera, prefixes and prefix G-buffers
 (this frame's resampled, previous), the previous final suffix reservoirs.
 Writes: suffix reservoirs (another buffer), shift counts, events.
@@ -72,9 +72,10 @@ def make_suffix_kernel(mutation: str = "none"):
     (docs/validation.md#power-checks-the-mutation-table):
     rc_index_at_prefix_length (the rc vertex recorded at index P, as if counted from the primary
     hit: the defect S2), suffix_seed_not_reset (the replay seed stored is the prefix's, not the one
-    the suffix was traced with: replay does not restart at x_P, 6 item 11), prefix_thp_in_target
+    the suffix was traced with: replay does not restart at x_P), prefix_thp_in_target
     (the suffix's integrand and target scaled by the prefix's, W divided by it: F W unchanged here,
-    but the target is no longer the one shifts evaluate, 6 item 12)."""
+    but the target is no longer the one shifts evaluate:
+    docs/theory/suffix_restir.md#prefixes-and-suffixes)."""
     module = KERNEL_MODULE if mutation == "none" else f"suffix_restir_{mutation}"
     rc_at_prefix = mutation == "rc_index_at_prefix_length"
     seed_not_reset = mutation == "suffix_seed_not_reset"

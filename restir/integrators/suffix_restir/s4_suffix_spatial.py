@@ -1,8 +1,9 @@
-"""Stage "suffix_spatial" (ALGORITHMS.md 5.7): pairwise MIS over the pixel's suffix and those of
-k neighbours drawn in a screen disk of the suffix spatial radius, each in its own suffix domain
-(the neighbour's resampled prefix end). A neighbour is a technique when it is on screen and has a
-prefix end (geometry only; the official code tests no normal or depth for suffix reuse, 6 item
-21). Shifts as in suffix temporal reuse; ping-pong rounds.
+"""Stage "suffix_spatial"
+(docs/theory/suffix_restir.md#resampling-suffixes-conditioned-on-the-prefix): pairwise MIS over the
+pixel's suffix and those of k neighbours drawn in a screen disk of the suffix spatial radius, each
+in its own suffix domain (the neighbour's resampled prefix end). A neighbour is a technique when it
+is on screen and has a prefix end (geometry only; the official code tests no normal or depth for
+suffix reuse). Shifts as in suffix temporal reuse; ping-pong rounds.
 Reads: scene, prefixes, prefix G-buffer, suffix reservoirs. Writes: suffix reservoirs (other
 buffer), shift counts, events.
 """

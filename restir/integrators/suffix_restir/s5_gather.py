@@ -1,4 +1,5 @@
-"""Stage "gather", the final gather (ALGORITHMS.md 5.9; docs/suffix_restir.md, "The final gather").
+"""Stage "gather", the final gather (docs/theory/suffix_restir.md#the-final-gather;
+docs/suffix_restir.md, "The final gather").
 
 Per pixel, N fresh prefixes from the primary hit (their own numbers, drawn independently of every
 reservoir of the frame). Prefix i's internal events are summed; if it has an end x_q, its suffix
@@ -7,7 +8,7 @@ x_q (s2_search.py; unfilled slots: random pixels with a prefix end in a screen d
 also traces the canonical suffix there (M_c = 1). The neighbours' confidences are capped at
 gather_cap. MIS over the neighbour techniques and the canonical one (generalized balance by
 default; pairwise with the canonical technique as an option), with the canonical technique in
-every prefix's weights but sampled only for prefix 0 and weighted by N (6 item 13):
+every prefix's weights but sampled only for prefix 0 and weighted by N (docs/theory/suffix_restir.md#the-final-gather):
 
     L = direct + w_filter (1 / N) sum_i [internal_i + thp_i (sum_j m_j F_i(T Y_j) J W_j + [i = 0] N m_c F_i(X_c) W_c)]
 
@@ -45,7 +46,7 @@ from .s2_search import NO_PIXEL, SearchStructure, Slots, nearest_prefix_ends
 def fill_slots(s: Slots, params: SRParams, prefixes: wp.array(dtype=PrefixReservoir), pixel: int, width: int,
                height: int, key: wp.uint32, dim: wp.uint32) -> Slots:
     """The slots the search left empty, filled with random pixels of the fallback disk that have
-    a prefix end and are not in a slot already (5.9)."""
+    a prefix end and are not in a slot already (docs/theory/suffix_restir.md#the-prefix-search)."""
     out = s
     for m in range(params.gather_suffixes):
         if out.pixel[m] != NO_PIXEL:
