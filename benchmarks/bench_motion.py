@@ -2,7 +2,7 @@
 
 `restir compare` measures a still camera: one reference serves every frame. Under a still camera
 temporal reuse alone has a full history at every pixel, and ReSTIR PT's spatial reuse does not pay
-after the denoiser (docs/decorrelation.md, section 8). A moving camera uncovers pixels without
+after the denoiser (docs/guide/decorrelation.md, section 8). A moving camera uncovers pixels without
 history every frame, which is where spatial reuse is expected to matter. This script measures it:
 
 - the camera moves by `camera_motion` (orbit: `--speed` degrees a frame) for `--frames` frames;

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 import restir  # noqa: E402
 
-SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes")
+SHARED = os.environ.get("RESTIR_SCENES") or os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes")
 
 
 def scenes(tmp):

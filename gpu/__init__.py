@@ -1,1 +1,1 @@
-"""The GPU check and the bundle that brings it to a bare device machine (docs/gpu.md)."""
+"""The GPU check and the bundle that brings it to a bare device machine (docs/guide/gpu.md)."""

@@ -1,6 +1,6 @@
 """`make gpu-bundle`: what a device machine needs and does not have, packed to travel in parts.
 
-A device call carries the working tree and at most 64 MiB (docs/gpu.md). The machine has Python,
+A device call carries the working tree and at most 64 MiB (docs/guide/gpu.md). The machine has Python,
 numpy, scipy, pytest, pytest-xdist, rich and Pillow, but not Warp, whose wheel alone is 149 MB.
 This script:
 
@@ -247,7 +247,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=str(ROOT / ".gpu-bundle"), help="the bundle's folder (git-ignored)")
     ap.add_argument("--python", default="312", help="the device's Python, as pip's --python-version (312)")
-    ap.add_argument("--scenes", default=str(ROOT.parent / "shared" / "scenes"), help="where veach-ajar/ and "
+    ap.add_argument("--scenes", default=os.environ.get("RESTIR_SCENES") or str(ROOT.parent / "shared" / "scenes"), help="where veach-ajar/ and "
                     "staircase2/ are")
     ap.add_argument("--no-cpu-runs", action="store_true", help="leave the agreement phase's CPU runs to the device")
     ap.add_argument("--part-mib", type=float, help="part size (default: what fits in a call beside the tree)")

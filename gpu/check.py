@@ -1,6 +1,6 @@
 """The GPU check: one run on a device machine that records what CUDA gives, within a time budget.
 
-    python3 gpu/check.py --device cuda --out $OUT            (on a device machine, docs/gpu.md)
+    python3 gpu/check.py --device cuda --out $OUT            (on a device machine, docs/guide/gpu.md)
     make gpu-check DEVICE=cpu QUICK=1                         (here: the same phases at toy sizes)
 
 Phases, in order, each given what is left of the budget (default 480 s; a phase that would not
@@ -504,7 +504,8 @@ def main(argv=None) -> int:
         save_cpu_runs(args.save_cpu_runs, sizes)
         return 0
     if args.scenes is None:
-        for candidate in (ROOT.parent / "shared" / "scenes", ROOT / ".gpu-bundle" / "scenes" / "scenes"):
+        named = [Path(os.environ["RESTIR_SCENES"])] if os.environ.get("RESTIR_SCENES") else []
+        for candidate in (*named, ROOT.parent / "shared" / "scenes", ROOT / ".gpu-bundle" / "scenes" / "scenes"):
             if candidate.exists():
                 args.scenes = str(candidate)
                 break

@@ -68,7 +68,7 @@ def install(part_dir: Path, stash: Path) -> int:
     pieces = manifest["pieces"]
     missing = [p["file"] for p in pieces if not (stash / p["file"]).exists()]
     if missing:
-        print(f"waiting for {', '.join(missing)}: carry the other parts in the next calls (docs/gpu.md)")
+        print(f"waiting for {', '.join(missing)}: carry the other parts in the next calls (docs/guide/gpu.md)")
         return 0
     for p in pieces:
         path = stash / p["file"]

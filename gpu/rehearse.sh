@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU bundle end to end on this machine, as a device machine would take it (docs/gpu.md):
+# The GPU bundle end to end on this machine, as a device machine would take it (docs/guide/gpu.md):
 # a copy of the working tree without .git, a fresh Python 3.12 with only the packages the device
 # image has (numpy, scipy, pytest, pytest-xdist, rich, Pillow), the parts installed one call at a
 # time into a stash, the packages imported, and the check run from them on the CPU at toy sizes.

@@ -1,5 +1,5 @@
 """The largest inputs restir accepts, each refused with a one-line error before any work is done
-(docs/limits.md): a film, sample count or path depth beyond them would exhaust the device's
+(docs/reference/limits.md): a film, sample count or path depth beyond them would exhaust the device's
 memory, overflow the kernels' 32-bit indices or run for days, and a number that is not finite
 has no meaning anywhere. The scene loader (with the file and line) and the API's configs (the
 command line's arguments) ask the same questions here."""

@@ -1,5 +1,5 @@
 """Why a temporal history's confidence may not depend on how many pixels hold its sample
-(docs/decorrelation.md, section 1): the smallest case, solved exactly with fractions and checked
+(docs/guide/decorrelation.md, section 1): the smallest case, solved exactly with fractions and checked
 by Monte Carlo.
 
     python docs/toys/duplication_confidence_bias.py     # numpy only, about 10 s

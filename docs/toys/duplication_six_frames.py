@@ -1,5 +1,5 @@
 """Duplication-scaled history confidence over six frames of temporal and spatial reuse
-(docs/decorrelation.md, section 1).
+(docs/guide/decorrelation.md, section 1).
 
     python docs/toys/duplication_six_frames.py    # numpy only, about 10 s
 

@@ -1,5 +1,5 @@
 """The contribution-weight update of a Metropolis-Hastings mutation of a resampled sample
-(docs/decorrelation.md, section 2), on a 2-D primary sample space u = (u1: prefix, u2: suffix)
+(docs/guide/decorrelation.md, section 2), on a 2-D primary sample space u = (u1: prefix, u2: suffix)
 with two colour channels and p_hat = their mean.
 
     python docs/toys/suffix_mutation_weight.py    # numpy only, about 20 s

@@ -2,7 +2,7 @@
 
 A denoiser averages neighbouring pixels. Independent pixel errors shrink under that average as
 1 / (pixels averaged); errors shared by neighbours (the blotches of spatiotemporal reuse) do not.
-Three measures of that sharing, each 0 or 1 for independent errors (docs/compare.md has the
+Three measures of that sharing, each 0 or 1 for independent errors (docs/guide/compare.md has the
 derivations):
 
 - `correlation_factor(e, B)`: B^2 * mean(block-mean(e)^2) / mean(e^2) over aligned B x B blocks,

@@ -119,7 +119,7 @@ def texture_grad1(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.v
     f11 = scalar_of(bitmap_texel(t, texels, xi + 1, yi + 1))
     # per texel along x and y, then texels per unit of the texture's uv, then the surface's uv
     # (Mitsuba scales both components by (width, height) after the to_uv product, which differs
-    # from this only when to_uv mixes u and v on a non-square image: docs/scenes.md)
+    # from this only when to_uv mixes u and v on a non-square image: docs/guide/scenes.md)
     df_dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01)
     df_dy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10)
     gx = df_dx * float(t.width)

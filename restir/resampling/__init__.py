@@ -7,5 +7,5 @@
 
 Everything works on scalars (targets p_hat, Jacobians J, confidences M): the sample payload
 (a light sample, a path) is the caller's, copied when `ris_stream` reports it selected.
-See docs/notation.md for the symbols.
+See docs/theory/notation.md for the symbols.
 """

@@ -1,5 +1,5 @@
 """`make gpu-check DEVICE=cpu QUICK=1`: the GPU check's every phase at toy sizes on the CPU, so that
-the script a lent device machine runs cannot rot between draws (gpu/check.py, docs/gpu.md)."""
+the script a lent device machine runs cannot rot between draws (gpu/check.py, docs/guide/gpu.md)."""
 import json
 import os
 import subprocess

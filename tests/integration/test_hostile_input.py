@@ -1,4 +1,4 @@
-"""Hostile input: every case gets the outcome the command line promises (docs/limits.md and README
+"""Hostile input: every case gets the outcome the command line promises (docs/reference/limits.md and README
 "Rendering"): a refusal before any work, as one line `file:line: error: ...` for a scene or
 `restir COMMAND: error: ...` for an argument, exit status 2 and no traceback. The scenes are kept
 in tests/data/hostile/ (its README); arguments that are hostile on their own are listed here."""

@@ -103,7 +103,7 @@ def test_mutations_are_detected(mutation):
 
 
 def test_bsdf_candidates_with_unshadowed_reuse_are_refused():
-    """BSDF candidates make W valid only for visibility-aware targets (docs/restir_di.md)."""
+    """BSDF candidates make W valid only for visibility-aware targets (docs/guide/restir_di.md)."""
     from restir.config import ConfigError
 
     with pytest.raises(ConfigError, match="visibility=reuse"):

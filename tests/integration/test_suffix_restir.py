@@ -1,4 +1,4 @@
-"""Suffix ReSTIR (docs/suffix_restir.md) against exact values and the path tracer, over independent
+"""Suffix ReSTIR (docs/guide/suffix_restir.md) against exact values and the path tracer, over independent
 runs (restir.validation.IndependentRuns: a run's statistic is its average image over T frames),
 and its mutants (docs/validation.md#power-checks-the-mutation-table).
 

@@ -1,5 +1,5 @@
 """U3 / the CRIS toy (docs/validation.md#level-1-toy-statistical-tests;
-docs/suffix_restir.md): a joint integral estimated with a
+docs/guide/suffix_restir.md): a joint integral estimated with a
 prefix weight times a conditional suffix weight, W_y x W_{x|y}, the suffix resampled across the
 suffix reservoirs of other prefixes, with the production resampling core (ris_stream, ris_merge,
 ris_finalize, the generalized balance weight).

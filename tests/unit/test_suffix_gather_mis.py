@@ -1,5 +1,5 @@
 """D1 for the final gather (docs/validation.md#level-0-deterministic-property-tests;
-docs/suffix_restir.md, "The final gather"): for a suffix
+docs/guide/suffix_restir.md, "The final gather"): for a suffix
 y of a fresh prefix's domain, the weights the gather gives y from every technique that can
 produce it sum to 1, computed by the gather's own functions (s5_gather.make_gather:
 neighbor_term, canonical_weight) with real shifts, on real frames of Suffix ReSTIR (its search

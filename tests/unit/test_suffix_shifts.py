@@ -1,4 +1,4 @@
-"""Suffix ReSTIR's suffix shifts (docs/suffix_restir.md): ReSTIR PT's shift with the prefix end
+"""Suffix ReSTIR's suffix shifts (docs/guide/suffix_restir.md): ReSTIR PT's shift with the prefix end
 as start vertex, on the suffixes Suffix ReSTIR traces at its prefix ends, between the prefix
 ends of two pixels: D2 (identity), D3 (round trip, J J' = 1) and D5 (J against finite
 differences in primary sample space), with the harnesses of the ReSTIR PT tests. The suffix

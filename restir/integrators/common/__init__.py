@@ -1,4 +1,4 @@
-"""The primary-hit layer every method shares (see docs/new_method.md).
+"""The primary-hit layer every method shares (see docs/developer/new_method.md).
 
 - gbuffer.py: the G-buffer (one struct of arrays), its allocation, and ping-pong pairs.
 - primary_hits.py: the stage that fills it (camera ray, primary hit, directly seen emission).

@@ -1,5 +1,5 @@
 """An MCMC mutation of a path sample's suffix: a fresh suffix after its reconnection vertex z,
-proposed with numbers from a stream of its own (docs/decorrelation.md 2; Sawhney et al. 2024,
+proposed with numbers from a stream of its own (docs/guide/decorrelation.md 2; Sawhney et al. 2024,
 "Decorrelating ReSTIR Samplers via MCMC Mutations").
 
 A path sample held in a pixel's domain is the pixel's prefix up to rcPrev (fixed by the sample's

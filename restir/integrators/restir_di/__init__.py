@@ -1,1 +1,1 @@
-"""ReSTIR DI (Bitterli et al. 2020) on the shared resampling core. See docs/restir_di.md."""
+"""ReSTIR DI (Bitterli et al. 2020) on the shared resampling core. See docs/guide/restir_di.md."""

@@ -90,7 +90,7 @@ class ReSTIRDI(Integrator):
                 settings.debug_mutation != "bsdf_unshadowed_reuse":
             # p_B omits V, so W is valid only for visibility-aware targets once samples are reused
             raise ConfigError("candidates.bsdf > 0 with reuse needs visibility=reuse "
-                              "(unshadowed reuse of BSDF candidates is biased; see docs/restir_di.md)")
+                              "(unshadowed reuse of BSDF candidates is biased; see docs/guide/restir_di.md)")
         settings.spatial.check(DI_MAX_NEIGHBORS)
         if settings.debug_mutation not in ReSTIRDI.MUTATIONS:
             raise ConfigError(f"debug.mutation must be one of {', '.join(ReSTIRDI.MUTATIONS)}")

@@ -7,7 +7,7 @@ in its measure (J = 1). The integrand at a primary hit x (smooth BSDF lobes only
     f_x(y) = f_s(x, wo, w_y) * Le(y -> x) * G(x, y) * V(x, y),   G = |cos theta_y| / d^2 (1 for env)
 
 `unshadowed_contribution` is f_x without V. The target p_hat is its luminance, times V when
-targets are visibility-aware (setting `visibility = reuse`; see docs/restir_di.md).
+targets are visibility-aware (setting `visibility = reuse`; see docs/guide/restir_di.md).
 """
 import warp as wp
 
@@ -161,7 +161,7 @@ def own_target(scene: SceneDevice, sh: Shading, r: DIReservoir, visibility: int)
 def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bsdf: int) -> wp.vec2:
     """(p_L(y), p_B(y)): the densities with which light sampling and BSDF sampling at sh produce
     r's sample y, both in y's measure (area on a triangle, solid angle toward the environment).
-    p_B omits V(x, y); why that is sound only with visibility-aware reuse: docs/restir_di.md."""
+    p_B omits V(x, y); why that is sound only with visibility-aware reuse: docs/guide/restir_di.md."""
     lp = light_point(scene, r)
     dd = direction_to_light(r, lp, sh.hit.p)
     d = wp.vec3(dd[0], dd[1], dd[2])

@@ -105,7 +105,7 @@ class PTSettings(PathReuseSettings):
                               "vertex, which stays) or rc_prev (after the vertex before it: z moves too)")
     mcmc_steps: int = setting("mcmc.steps", 0, "MCMC mutations of each pixel's sample per frame, after temporal and "
                               "before spatial reuse: the path redrawn after mcmc.start, accepted with min(1, p_hat "
-                              "ratio) (unbiased; measured not to decorrelate the error, docs/decorrelation.md; 0: off)")
+                              "ratio) (unbiased; measured not to decorrelate the error, docs/guide/decorrelation.md; 0: off)")
     spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=20.0, reciprocal=True)
     rc_near_distance: float = setting("rc.near_distance", 0.1, "hybrid: shortest reconnection segment, scene units")
     rc_roughness: float = setting("rc.roughness", 0.2, "hybrid: glossy lobes with a linear roughness above this "

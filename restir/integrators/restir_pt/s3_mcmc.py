@@ -1,6 +1,6 @@
 """Stage 3, MCMC suffix mutations (`mcmc.steps` > 0): each pixel's sample after temporal reuse
 gets a fixed number of Metropolis steps on its path after the rc vertex z, or after rcPrev
-(`mcmc.start`; path_reuse/suffix_mutation.py; docs/decorrelation.md 2). A step proposes a fresh suffix,
+(`mcmc.start`; path_reuse/suffix_mutation.py; docs/guide/decorrelation.md 2). A step proposes a fresh suffix,
 evaluates it in this pixel's domain with the shift (the sample's own domain: J = 1), and accepts
 with min(1, p_hat(Y) / p_hat(X)); on acceptance W becomes W p_hat(X) / p_hat(Y). M does not
 change (confidence is never a sample value), and neither does the number of steps: it is a

@@ -1,5 +1,5 @@
 """Suffix ReSTIR (Kettunen et al. 2023, conditional RIS): prefix reuse, suffix reuse, a prefix
-search structure and a final gather (docs/suffix_restir.md).
+search structure and a final gather (docs/guide/suffix_restir.md).
 
 - params.py: per-frame values of the stages.
 - prefix.py: the adaptive prefix end, a traced prefix, the prefix reservoir and its shift.

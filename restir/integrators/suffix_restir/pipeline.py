@@ -1,4 +1,4 @@
-"""Suffix ReSTIR as a pipeline of stages (docs/theory/suffix_restir.md; docs/suffix_restir.md): primary hits,
+"""Suffix ReSTIR as a pipeline of stages (docs/theory/suffix_restir.md; docs/guide/suffix_restir.md): primary hits,
 ReSTIR DI (direct light at the primary hit, unless direct=pt), prefix trace and temporal prefix
 reuse, the prefix search structure, suffix trace, suffix temporal and spatial reuse, final gather.
 
@@ -119,7 +119,7 @@ class SuffixSettings(PathReuseSettings):
 # pass's useMMIS): the final gather alone, over fresh prefixes and fresh suffixes, combined by the
 # same MIS, with no prefix resampling, no suffix reuse (temporal or spatial), the reconnection
 # shift and no confidence cap (every M is 1). Not a method of its own: these settings of this one
-# (docs/suffix_restir.md, "The MMIS baseline").
+# (docs/guide/suffix_restir.md, "The MMIS baseline").
 MMIS_BASELINE = {"shift": "reconnection", "prefix.temporal": False, "suffix.temporal": False,
                  "suffix.spatial.rounds": 0}
 

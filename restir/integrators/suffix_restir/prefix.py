@@ -1,6 +1,6 @@
 """Prefixes (docs/theory/suffix_restir.md#the-prefix-end and #prefix-resampling;
-docs/suffix_restir.md): the adaptive prefix-end rule, a prefix traced with its internal events, the
-prefix reservoir, and the prefix's shift to another pixel (temporal prefix reuse).
+docs/guide/suffix_restir.md): the adaptive prefix-end rule, a prefix traced with its internal
+events, the prefix reservoir, and the prefix's shift to another pixel (temporal prefix reuse).
 
 Vertex 0 is the primary hit. A prefix ends at x_P, one vertex after the first bounce that samples
 a rough lobe, unless x_P is specular-only or reached over a segment of at most `short_segment`

@@ -1,7 +1,7 @@
 """The prefix search structure (docs/theory/suffix_restir.md#the-prefix-search;
-docs/suffix_restir.md): one box per pixel around its resampled prefix end, and the query that finds
-a fresh prefix end's neighbours, over one of three structures (the same code on the CPU and CUDA,
-rebuilt every frame):
+docs/guide/suffix_restir.md): one box per pixel around its resampled prefix end, and the query that
+finds a fresh prefix end's neighbours, over one of three structures (the same code on the CPU and
+CUDA, rebuilt every frame):
 
 - `grid` (default): a hashed uniform grid over the box centres, sorted by cell, with the boxes
   copied into that order, so a query reads each cell's candidates as one contiguous run. Cells

@@ -1,5 +1,5 @@
 """Stage "gather", the final gather (docs/theory/suffix_restir.md#the-final-gather;
-docs/suffix_restir.md, "The final gather").
+docs/guide/suffix_restir.md, "The final gather").
 
 Per pixel, N fresh prefixes from the primary hit (their own numbers, drawn independently of every
 reservoir of the frame). Prefix i's internal events are summed; if it has an end x_q, its suffix
