@@ -3,7 +3,7 @@ PY ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow test-debug bench clean browser docs gpu-bundle gpu-check gpu-rehearse
+.PHONY: demo test test-slow test-debug bench clean browser docs results gpu-bundle gpu-check gpu-rehearse
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PY) -m venv $(VENV)
@@ -26,6 +26,13 @@ demo: $(STAMP)
 # generated from the code (docgen/). `make docs SERVE=1` serves it at http://127.0.0.1:8000 instead.
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs $(if $(SERVE),serve,build --strict)
+
+# The headline measurements (benchmarks/results_suite.py: frame cost and memory, equal time raw and
+# denoised, ReSTIR DI on many lights, Mitsuba 3, scene loads, the matrix verdicts) into
+# benchmarks/results/results.json, then docs/results.md and the README's status table from it.
+# QUICK=1: smaller images, fewer frames and seconds.
+results: $(STAMP)
+	$(VENV)/bin/python benchmarks/results_suite.py $(if $(QUICK),--quick)
 
 # The report test drives Debian's chromium with chromedriver (Selenium); nothing downloads a browser.
 browser:
