@@ -320,7 +320,7 @@ def render_results_page(results: dict) -> str:
     if results.get("mode") == "quick":
         lines += ['!!! note "A quick run"',
                   f"    These numbers come from `--quick`: images of {sizes.get('lines')} lines, "
-                  f"{sizes.get('seconds')} s a method, references at {sizes.get('reference_spp')} spp, the frame "
+                  f"{sizes.get('seconds', 0):g} s a method, references at {sizes.get('reference_spp')} spp, the frame "
                   f"cost at {sizes.get('cost_size')}x{sizes.get('cost_size')}. They show that the suite runs; "
                   "quote the default suite's numbers.", ""]
     lines += ["## The machine", "", *_machine(results), "",
