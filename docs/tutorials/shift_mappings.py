@@ -116,14 +116,14 @@ for m in MUTANTS:
     checked[m] = (r, relative_errors(r))
     print(describe("indirect-room", f"reconnection, {m}", r, checked[m][1]))
 
-fig, ax = plt.subplots(1, 3, figsize=(13, 4))
+fig, ax = plt.subplots(1, 3, figsize=(14, 4.4))
 for a, (label, (r, e)) in zip(ax, checked.items()):
     glossy = (r[:, 5] > 0) & (r[:, 6] != MAT_DIFFUSE)
     a.loglog(r[~glossy, 2], r[~glossy, 1], ".", ms=3, label="other paths")
     a.loglog(r[glossy, 2], r[glossy, 1], ".", ms=3, label="z scatters on through a glossy lobe")
     lim = [r[:, 1:3].min(), r[:, 1:3].max()]
     a.plot(lim, lim, "k", lw=0.6)
-    a.set(title=f"{label}: 99th pct. rel. error {np.percentile(e, 99):.1e}",
+    a.set(title=f"{label}\n99th percentile of the relative error: {np.percentile(e, 99):.1e}",
           xlabel="J, finite differences", ylabel="J returned by the shift")
 ax[0].legend(fontsize=8)
 plt.show()
