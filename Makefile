@@ -60,7 +60,7 @@ test-debug: $(STAMP)
 	RESTIR_WARP_DEBUG=1 $(VENV)/bin/pytest -q -n auto --dist loadfile --ignore=tests/unit/test_cuda_compile.py \
 		$(DEBUG_TESTS)
 
-# The GPU check (docs/gpu.md): on a device machine it runs as `python3 gpu/check.py`; here
+# The GPU check (docs/guide/gpu.md): on a device machine it runs as `python3 gpu/check.py`; here
 # `make gpu-check DEVICE=cpu QUICK=1` runs the same phases at toy sizes.
 DEVICE ?= cuda
 gpu-check: $(STAMP)
