@@ -12,8 +12,8 @@ vectors are in, and eval takes the bump map's factor here, after the kind's valu
 through): eval and pdf take the factor opacity here, and `bsdf_sample` picks the null lobe.
 
 Adding a material kind: a module in bsdfs/ with its eval, pdf, sample and LOBES, one line in
-each of `kind_eval`, `kind_pdf`, `kind_sample`, `bsdf_lobes` (and `smooth_lobe` if its non-delta
-lobes depend on the directions), its MAT_* constant in types.py, and its parameters in the
+each of `kind_eval`, `kind_pdf`, `kind_sample`, `kind_lobes` and, if it has a non-delta lobe,
+`smooth_lobe`; its MAT_* constant in types.py, and its parameters in the
 loader (scene.py; a spectrum read with `spectrum()` is texturable with no device change).
 
 Lobes (types.py LOBE_*): every sample reports the lobe it chose; `bsdf_eval_lobes` and

@@ -1,4 +1,4 @@
-"""Stage 2, initial resampling: RIS over N_L light and N_B BSDF candidates per pixel
+"""Stage 1, initial resampling: RIS over N_L light and N_B BSDF candidates per pixel
 (Bitterli 2020, Alg. 3; the two generators combined as in Talbot 2005's multiple-distribution RIS).
 
 Light candidates come from the NEE light sampler (power-proportional triangles uniform by area,

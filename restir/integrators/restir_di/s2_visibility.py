@@ -1,4 +1,4 @@
-"""Stage 3, visibility (only with visibility-aware targets, `visibility = reuse`): one shadow
+"""Stage 2, visibility (only with visibility-aware targets, `visibility = reuse`): one shadow
 ray for the initial sample; an occluded sample keeps its confidence but gets W = 0.
 
 Why this is unbiased: with W' = W V(y), E[g(y) W'] = integral of g V over the light points, so W'

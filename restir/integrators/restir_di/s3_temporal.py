@@ -1,4 +1,4 @@
-"""Stage 4, temporal reuse: the pixel's new reservoir with last frame's final reservoir where
+"""Stage 3, temporal reuse: the pixel's new reservoir with last frame's final reservoir where
 this pixel's primary hit was seen (generalized balance / Talbot MIS over the two;
 docs/theory/restir_di.md#temporal-reuse).
 

@@ -1,4 +1,4 @@
-"""Stage 5, spatial reuse: pairwise MIS over the pixel and k neighbours (docs/theory/restir_di.md#spatial-reuse).
+"""Stage 4, spatial reuse: pairwise MIS over the pixel and k neighbours (docs/theory/restir_di.md#spatial-reuse).
 
 Neighbours: k pixels drawn uniformly in a disk of `spatial_radius` pixels around the pixel,
 kept when on screen, with a primary hit, not the pixel itself and geometrically similar: a
