@@ -24,6 +24,7 @@ OUTSIDE_NOTES = re.compile(r"\b(ALGORITHMS|TESTING|DESIGN|STYLE|ANCHORS|BENCHMAR
 OUTSIDE_PATH = re.compile(r"\.\./shared(?!/scenes\b)|/work/")
 WORK_ITEMS = re.compile(r"\b(issues?\s*#?\d+|stops?\s+\d+|the issue\b|(this|last|next|previous) session\b|"
                         r"sessions?\s+\d+|first look|second look|third look)", re.I)
+SESSION_IN_PROSE = re.compile(r"\bsessions?\b", re.I)  # in Markdown: no diary words at all (pytest's scope="session" is code)
 DOC_PATH = re.compile(r"\bdocs/[\w/.-]+?\.(?:md|py)\b")
 
 
@@ -46,6 +47,8 @@ def problems(name: str, text: str) -> list:
             m = pattern.search(line)
             if m:
                 out.append(f"{name}:{n}: {what}: {m.group(0)!r}")
+        if name.endswith(".md") and SESSION_IN_PROSE.search(line):
+            out.append(f"{name}:{n}: work-item words: {SESSION_IN_PROSE.search(line).group(0)!r}")
         for m in DOC_PATH.finditer(line):
             generated = m.group(0).removeprefix("docs/") in PAGES  # built from the code by mkdocs
             if not generated and not (ROOT / m.group(0)).exists():
@@ -60,6 +63,7 @@ def test_checker_finds_each_kind():
             "ok = '../shared/scenes'  # the scenes' default folder is allowed\n"
             "see docs/guide/no_such_page.md and docs/guide/cli.md\n")
     found = problems("t.py", text)
+    assert problems("t.md", "measured in an earlier session\n") and not problems("t.py", 'scope="session"\n')
     assert any("t.py:1: cites" in f for f in found)
     assert any("t.py:2: names a path" in f for f in found)
     assert any("t.py:3: work-item" in f for f in found)
