@@ -1,9 +1,11 @@
 """ReSTIR DI defaults: how much reuse lowers the per-frame error, over temporal.cap x
-spatial.radius x spatial.rounds x resolution (issue: reuse nearly idle with the defaults).
+spatial.radius x spatial.rounds x resolution, raw and after Open Image Denoise.
 
-    .venv/bin/python benchmarks/bench_di_defaults.py --phase all
-    .venv/bin/python benchmarks/bench_di_defaults.py --phase proposal --rule-r1080 15 --rule-floor 2 --cap 2
+    .venv/bin/python benchmarks/bench_di_defaults.py --phase rules       # the grid the defaults came from
+    .venv/bin/python benchmarks/bench_di_defaults.py --phase candidates rules_timing --sizes 128 256 \
+        --cap 2 --rounds 1 --rule-r1080 5 --rule-floor 5 --timing-rules 2,2,8,8 2,1,8,8
     .venv/bin/python benchmarks/bench_di_defaults.py --phase defaults    # the shipped defaults
+    .venv/bin/python benchmarks/bench_di_defaults.py --phase all         # the older, wider sweep
 
 Rows, references and results go to --out (default benchmarks/results/di_defaults/: results.json,
 ref_*.npz). The whole sweep took about 24 minutes on 2 cores (shared with other jobs); rerun, it
@@ -16,7 +18,10 @@ measures it. Every configuration is compared with *no reuse at the same candidat
 (`temporal=false spatial.rounds=0`, same seed): ratio = relMSE(no reuse) / relMSE(config), so
 the ratio isolates what reuse buys. Emitters are hidden (lighting only). The reference is the
 path tracer (MIS, max_depth 2, the same image in expectation) at high spp, cached as .npz; its
-own noise adds `ref_floor` = mean(Var[ref] / (ref^2 + 0.01)) to every relMSE (printed).
+own noise adds `ref_floor` = mean(Var[ref] / (ref^2 + 0.01)) to every relMSE (printed). Each
+row also holds the same relMSE of the frames after Open Image Denoise (albedo and normal guides;
+NaN without pyoidn): spatial reuse copies a neighbour's sample, and a small disk puts the copies
+side by side, an error the per-frame relMSE counts like any other but the denoiser keeps.
 
 Radii are given as a fraction of the image height (radius_px = frac * height); the table
 prints both the pixels and r1080 = frac * 1080, the radius the same rule gives at 1080 lines.
@@ -35,13 +40,23 @@ can be rerun or resumed; `--fresh` recomputes):
   floor     1 camera sample x 256 NEE light samples per pixel and frame: the camera-jitter error
             that no light reuse removes (bounds the ratio)
   proposal  the proposed defaults (--rule-r1080, --rule-floor, --cap, --rounds) at 64/128/256
-            on both scenes, against no reuse and today's defaults
+            on both scenes, against no reuse and the first defaults
   timing    frame time of five configurations at 128x128 (3 alternating repeats, medians)
   res512    many-lights 512x512, seed 1: cap 5, 2 rounds, radius 3, 7.1 and 14.2 px
   long      many-lights 128x128, 64 frames: temporal drift by cap
   overflow  cap 0 with spatial reuse over 48 frames, 64x64: max M and non-finite counters per frame
-  defaults  the shipped defaults (ReSTIRDI.SETTINGS, nothing set but the candidates) at 64/128/256
+  defaults  the shipped defaults (DISettings, nothing set but the candidates) at 64/128/256
             against no reuse: the check that reuse lowers per-frame relMSE at least 2x at 128x128
+  rules     both scenes at 128, 64 and 256 lines, seeds 1 and 2: cap x radius in px x 1 or 2
+            rounds and temporal reuse alone, raw and denoised gain (the radii include 15 px and
+            the rule before it, max(2, 15 x height / 1080)); rules512: the same at 512, seed 1
+  candidates  the rules compared (15 px with cap 5 and 2 rounds; max(2, 15 h / 1080) px with cap
+            5 and 2 rounds; the proposal and --timing-rules) at --sizes on both scenes
+  rules_timing  frame time of the same rules and no reuse at --sizes as ratios to the 15 px rule,
+            each of --repeats repeats rendering every rule in turn (medians and ranges)
+
+A rule's radius is max(--rule-floor, --rule-r1080 x height / 1080) px: --rule-r1080 5
+--rule-floor 5 is 5 px up to 1080 lines, scaled with the height above.
 """
 import argparse
 import json
@@ -63,8 +78,9 @@ FRACS = [1.5 / 128, 2 / 128, 3 / 128, 30 / 1080, 5 / 128, 7 / 128, 10 / 128, 20 
 FRACS_256 = [1.5 / 128, 3 / 128, 30 / 1080, 5 / 128, 10 / 128, 20 / 128]
 REF_SPP = {64: 8192, 128: 4096, 256: 2048, 512: 1024}
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
-# the defaults at the time of the issue, spelled out (so that the row keeps its meaning when they change)
-TODAY = {"temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": 30.0}
+# the defaults before the first sweep (cap 20, the literature's 30 px at any size), spelled out so that the
+# row keeps its meaning when the defaults change
+FIRST = {"temporal": True, "temporal.cap": 20.0, "spatial.rounds": 2, "spatial.neighbors": 3, "spatial.radius": 30.0}
 
 
 def relmse(x, ref):
@@ -80,6 +96,7 @@ class Bench:
                 self.data = json.load(f)
         self.scenes = {}
         self.refs = {}
+        self.denoisers = {}
 
     def save(self):
         tmp = self.path + ".tmp"
@@ -120,6 +137,21 @@ class Bench:
         self.refs[key] = (img, floor)
         return self.refs[key]
 
+    def denoiser(self, name, res):
+        """Open Image Denoise with the scene's albedo and normal guides (None without pyoidn)."""
+        key = (name, res)
+        if key not in self.denoisers:
+            from restir.config import ConfigError
+
+            try:
+                from restir.compare.denoise import Denoiser
+
+                self.denoisers[key] = Denoiser.for_scene(self.scene(name, res), restir.RenderConfig(
+                    method="pt", spp=1, frames=1, width=res, height=res))
+            except ConfigError:
+                self.denoisers[key] = None
+        return self.denoisers[key]
+
     def run(self, name, res, seed, settings, fresh=False):
         key = f"{name}/{res}/seed{seed}/" + json.dumps(settings, sort_keys=True)
         if key in self.data["rows"] and not fresh:
@@ -131,9 +163,12 @@ class Bench:
             settings=settings))
         frames = r.frame_images.astype(np.float64)
         per_frame = [relmse(f, ref) for f in frames]
+        den = self.denoiser(name, res)
+        denoised = [relmse(den(f), ref) for f in frames[TAIL]] if den else [float("nan")]
         c = r.stats["counters"]
         row = {"scene": name, "res": res, "seed": seed, "settings": settings,
                "relmse": float(np.mean(per_frame[TAIL])), "relmse_frames": per_frame,
+               "relmse_denoised": float(np.mean(denoised)), "radius_px": r.stats["settings"]["spatial.radius"],
                "ms_per_frame": r.stats["ms_per_frame"], "wall_s": time.perf_counter() - t,
                "nonfinite": int(c.get("nonfinite_weights", 0) + c.get("nonfinite_outputs", 0)),
                "counters": c}
@@ -148,17 +183,18 @@ def combo(cap, frac, rounds, res, cands):
 
 
 def describe(s, res):
-    """Short label of a settings dict (defaults filled in as ReSTIRDI.SETTINGS has them)."""
-    t = s.get("temporal", True)
-    rounds = s.get("spatial.rounds", 2)
+    """Short label of a settings dict (defaults filled in as DISettings has them)."""
+    from restir.integrators.common.reuse_domains import spatial_radius_for
+    from restir.integrators.restir_di.pipeline import DISettings
+
+    d = DISettings()
+    t = s.get("temporal", d.temporal)
+    rounds = s.get("spatial.rounds", d.spatial.rounds)
     rad = s.get("spatial.radius", "auto")
     if rad == "auto":
-        from restir.integrators.common.reuse_domains import spatial_radius_for
-        from restir.integrators.restir_di.pipeline import DISettings
-
-        rad = spatial_radius_for(DISettings().spatial.radius_at_1080, res)
+        rad = spatial_radius_for(d.spatial.radius_at_1080, res)
     parts = []
-    parts.append(f"T cap {s.get('temporal.cap', 5.0):g}" if t else "T off")
+    parts.append(f"T cap {s.get('temporal.cap', d.temporal_cap):g}" if t else "T off")
     if rounds:
         parts.append(f"S {rounds}x r {rad:.2f}px ({rad / res:.4f} h, r1080 {rad / res * 1080:.1f})")
     else:
@@ -237,7 +273,7 @@ def best_caps(bench, k=2):
 
 def phase_main128(bench):
     res, seeds = 128, [1, 2]
-    table(bench, "many-lights", res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
+    table(bench, "many-lights", res, seeds, [{"candidates": 32, **FIRST}], 32, "first defaults")
     table(bench, "many-lights", res, seeds, separate(res, 32, CAPS, FRACS, [1, 2]), 32, "separate")
     g = table(bench, "many-lights", res, seeds, grid(res, 32, CAPS, FRACS, [1, 2]), 32, "grid")
     print_matrix(g, CAPS, FRACS, [1, 2], res)
@@ -249,7 +285,7 @@ def phase_main128(bench):
 
 def phase_res64(bench):
     res, seeds = 64, [1, 2]
-    table(bench, "many-lights", res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
+    table(bench, "many-lights", res, seeds, [{"candidates": 32, **FIRST}], 32, "first defaults")
     table(bench, "many-lights", res, seeds, separate(res, 32, CAPS, FRACS, [1, 2]), 32, "separate")
     g = table(bench, "many-lights", res, seeds, grid(res, 32, CAPS, FRACS, [1, 2]), 32, "grid")
     print_matrix(g, CAPS, FRACS, [1, 2], res)
@@ -259,7 +295,7 @@ def phase_res256(bench):
     res, seeds = 256, [1]
     caps = sorted(set(best_caps(bench, 1)) | {20}, key=lambda c: CAPS.index(c))
     print(f"\n256x256: caps {caps} (the best of the 128 grid, and 20)")
-    table(bench, "many-lights", res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
+    table(bench, "many-lights", res, seeds, [{"candidates": 32, **FIRST}], 32, "first defaults")
     table(bench, "many-lights", res, seeds, separate(res, 32, [2, 5, 20], [3 / 128, 30 / 1080, 5 / 128, 10 / 128], [1, 2]),
           32, "separate")
     g = table(bench, "many-lights", res, seeds, grid(res, 32, caps, FRACS_256, [1, 2]), 32, "grid")
@@ -268,7 +304,7 @@ def phase_res256(bench):
 
 def scene_sweep(bench, name, res, seeds, fr, caps, separate_caps):
     """Today's defaults, then temporal-only / spatial-only rows, then the cap x radius x rounds grid."""
-    table(bench, name, res, seeds, [{"candidates": 32, **TODAY}], 32, "today's defaults")
+    table(bench, name, res, seeds, [{"candidates": 32, **FIRST}], 32, "first defaults")
     table(bench, name, res, seeds, separate(res, 32, separate_caps, fr, [1, 2]), 32, "separate")
     g = table(bench, name, res, seeds, grid(res, 32, caps, fr, [1, 2]), 32, "grid")
     print_matrix(g, caps, fr, [1, 2], res)
@@ -330,7 +366,7 @@ def phase_timing(bench, res=128, repeats=3):
     configs = {"no reuse": NO_REUSE, "temporal cap 5 only": {"temporal.cap": 5.0, "spatial.rounds": 0},
                "T cap 5 + S 1 round r 2 px": {"temporal.cap": 5.0, "spatial.rounds": 1, "spatial.radius": r2},
                "T cap 5 + S 2 rounds r 2 px": {"temporal.cap": 5.0, "spatial.rounds": 2, "spatial.radius": r2},
-               "today's defaults": TODAY}
+               "first defaults": FIRST}
     times = {k: [] for k in configs}
     stages = {}
     for _ in range(repeats):
@@ -365,9 +401,9 @@ def phase_long(bench, frames=64, res=128):
                       ("T cap 2 only", {"temporal.cap": 2.0, "spatial.rounds": 0}),
                       ("T cap 5 only", {"temporal.cap": 5.0, "spatial.rounds": 0}),
                       ("T cap 20 only", {"temporal.cap": 20.0, "spatial.rounds": 0}),
-                      ("T cap 2 + S 2x r 2 px", {"temporal.cap": 2.0, "spatial.radius": 2.0}),
-                      ("T cap 5 + S 2x r 2 px", {"temporal.cap": 5.0, "spatial.radius": 2.0}),
-                      ("T cap 20 + S 2x r 2 px", {"temporal.cap": 20.0, "spatial.radius": 2.0})):
+                      ("T cap 2 + S 2x r 2 px", {"temporal.cap": 2.0, "spatial.radius": 2.0, "spatial.rounds": 2}),
+                      ("T cap 5 + S 2x r 2 px", {"temporal.cap": 5.0, "spatial.radius": 2.0, "spatial.rounds": 2}),
+                      ("T cap 20 + S 2x r 2 px", {"temporal.cap": 20.0, "spatial.radius": 2.0, "spatial.rounds": 2})):
         r = restir.render(bench.scene("many-lights", res), restir.RenderConfig(
             method="restir-di", spp=1, frames=frames, seed=1, width=res, height=res, keep_frames=True, settings=st))
         e = [relmse(f, ref) for f in r.frame_images.astype(np.float64)]
@@ -392,7 +428,7 @@ def phase_proposal(bench, args):
             for cands in (32,) if res != 128 else (32, 8):
                 prop = {"candidates": cands, "temporal.cap": float(args.cap), "spatial.rounds": args.rounds,
                         "spatial.radius": rule_radius(res, args.rule_r1080, args.rule_floor)}
-                today = {"candidates": cands, **TODAY}
+                today = {"candidates": cands, **FIRST}
                 rows = table(bench, name, res, seeds, [today, prop], cands, "proposal")
                 out[f"{name}/{res}/{cands}"] = {"today": rows[0]["ratio"], "proposal": rows[1]["ratio"],
                                                 "proposal_settings": prop, "relmse": rows[1]["relmse"],
@@ -403,10 +439,137 @@ def phase_proposal(bench, args):
     bench.data.setdefault("proposals", {})[label] = {"rule_r1080": args.rule_r1080, "rule_floor": args.rule_floor,
                                                      "cap": args.cap, "rounds": args.rounds, "results": out}
     bench.save()
-    print("\n  ratio no-reuse/config (same candidates): today's defaults -> proposal")
+    print("\n  ratio no-reuse/config (same candidates): the first defaults -> proposal")
     for k, v in out.items():
         print(f"    {k:<24} {v['today']:5.2f}x -> {v['proposal']:5.2f}x   "
               f"(ms/frame {v['ms_today']:.1f} -> {v['ms_prop']:.1f})")
+
+
+# The candidate rules of phase rules and rules_timing: (temporal.cap, spatial.rounds, radius in px
+# as a function of the image height), 3 neighbours, 32 light + 1 BSDF candidates.
+def rule_03a4532(h):
+    """15 px up to 1080 lines, scaled with the height above (ReSTIR DI's auto radius at 03a4532)."""
+    return 15.0 * max(1.0, h / 1080.0)
+
+
+def rule_before(h):
+    """max(2, 15 x height / 1080) px: ReSTIR DI's auto radius before 03a4532."""
+    return max(2.0, 15.0 * h / 1080.0)
+
+
+RULE_SCENES = ("many-lights", "cornell-box")
+RULE_RADII = {64: [1.5, 2, 3, 5, 8, 15], 128: [2, 3, 5, 8, 15], 256: [2, 3, 5, 8, 15], 512: [3, 5, 8, 15]}
+RULE_CAPS = {64: [2, 5], 128: [2, 5, 10], 256: [2, 5], 512: [5]}
+RULE_SEEDS = {64: [1, 2], 128: [1, 2], 256: [1, 2], 512: [1]}
+
+
+def phase_rules(bench, sizes=(128, 64, 256)):
+    """Per-frame reuse gain (no reuse / config, same candidates and seed) of temporal.cap x radius
+    in px x rounds at each size, on both scenes; raw and after Open Image Denoise. The radius grid
+    holds the 03a4532 rule (15 px) and the rule before it (2 px at 64 and 128, 3.56 px at 256)."""
+    out = bench.data.setdefault("rules", {})
+    for res in sizes:
+        radii = sorted(set(RULE_RADII[res]) | {rule_before(res)})
+        for name in RULE_SCENES:
+            seeds = RULE_SEEDS[res]
+            configs = [{"candidates": 32, "temporal.cap": float(c), "spatial.rounds": r, "spatial.radius": float(x)}
+                       for r in (1, 2) for c in RULE_CAPS[res] for x in radii]
+            configs += [{"candidates": 32, "temporal.cap": float(c), "spatial.rounds": 0} for c in RULE_CAPS[res]]
+            rows = table(bench, name, res, seeds, configs, 32, "rules")
+            base = [bench.run(name, res, sd, {"candidates": 32, **NO_REUSE}) for sd in seeds]
+            d0 = float(np.mean([b["relmse_denoised"] for b in base]))
+            for row in rows:
+                rs = [bench.run(name, res, sd, row["settings"]) for sd in seeds]
+                row["relmse_denoised"] = float(np.mean([x["relmse_denoised"] for x in rs]))
+                row["ratio_denoised"] = d0 / row["relmse_denoised"]
+            out[f"{name}/{res}"] = rows
+            print(f"  {name} {res}x{res}: gain raw / after the denoiser, by rounds and cap (rows), radius px (columns)")
+            print("              " + " ".join(f"{x:>11g}" for x in radii))
+            for r in (1, 2):
+                for c in RULE_CAPS[res]:
+                    cells = []
+                    for x in radii:
+                        row = next(w for w in rows if w["settings"].get("spatial.rounds") == r and
+                                   w["settings"]["temporal.cap"] == c and w["settings"].get("spatial.radius") == x)
+                        cells.append(f"{row['ratio']:5.2f}/{row['ratio_denoised']:5.2f}")
+                    print(f"    {r} round{'s' if r > 1 else ' '} cap {c:>2g} " + " ".join(cells), flush=True)
+            for row in rows:
+                if row["settings"].get("spatial.rounds") == 0:
+                    print(f"    temporal only, cap {row['settings']['temporal.cap']:g}: {row['ratio']:.2f} / "
+                          f"{row['ratio_denoised']:.2f}")
+    bench.save()
+
+
+def candidate_rules(args, res):
+    """{label: settings} of the rules compared by phases candidates and rules_timing: the 03a4532
+    defaults, the rule before them, the proposal (--cap, --rounds, --rule-r1080, --rule-floor) and
+    any --timing-rules."""
+    rules = {"03a4532 (cap 5, 2 rounds, 15 px)": (5.0, 2, rule_03a4532(res)),
+             "before 03a4532 (cap 5, 2 rounds, max(2, 15 h/1080) px)": (5.0, 2, rule_before(res)),
+             "proposal": (float(args.cap), args.rounds, rule_radius(res, args.rule_r1080, args.rule_floor))}
+    for spec in args.timing_rules:  # more rules: CAP,ROUNDS,R1080,FLOOR
+        cap, rounds, r1080, floor = (float(x) for x in spec.split(","))
+        rules[f"cap {cap:g}, {rounds:g} round(s), max({r1080:g} h/1080, {floor:g}) px"] = (
+            cap, int(rounds), rule_radius(res, r1080, floor))
+    return {k: {"temporal.cap": c, "spatial.rounds": r, "spatial.radius": float(x)} for k, (c, r, x) in rules.items()}
+
+
+def phase_candidates(bench, args):
+    """The candidate rules only (rows shared with phase rules where the settings agree), at
+    --sizes on both scenes: per-frame reuse gain raw and after the denoiser."""
+    out = bench.data.setdefault("candidates", {})
+    for res in args.sizes:
+        for name in RULE_SCENES:
+            rules = candidate_rules(args, res)
+            rows = table(bench, name, res, RULE_SEEDS[res], [{"candidates": 32, **st} for st in rules.values()], 32,
+                         "rules")
+            seeds = RULE_SEEDS[res]
+            d0 = float(np.mean([bench.run(name, res, sd, {"candidates": 32, **NO_REUSE})["relmse_denoised"]
+                                for sd in seeds]))
+            for label, row in zip(rules, rows):
+                row["rule"] = label
+                row["relmse_denoised"] = float(np.mean([bench.run(name, res, sd, row["settings"])["relmse_denoised"]
+                                                        for sd in seeds]))
+                row["ratio_denoised"] = d0 / row["relmse_denoised"]
+                print(f"    {name} {res}: {label:<58} gain {row['ratio']:.2f} raw, {row['ratio_denoised']:.2f} "
+                      f"after the denoiser", flush=True)
+            out[f"{name}/{res}"] = rows
+    bench.save()
+
+
+def phase_rules_timing(bench, args):
+    """Frame time of the candidate rules as ratios to the 03a4532 defaults, taken in alternation
+    (each repeat renders every configuration once, in turn), so that a busy machine slows both
+    sides of a ratio alike; the median and range of the per-repeat ratios."""
+    repeats = args.repeats
+    print(f"\n== rules timing: many-lights, 32 candidates, {FRAMES} frames, {repeats} alternating repeats ==")
+    out = {}
+    for res in args.sizes:
+        configs = {**candidate_rules(args, res), "no reuse": NO_REUSE}
+        for label, st in configs.items():  # compile and warm up
+            restir.render(bench.scene("many-lights", res), restir.RenderConfig(
+                method="restir-di", spp=1, frames=2, seed=1, width=res, height=res, settings=st))
+        times = {k: [] for k in configs}
+        for _ in range(repeats):
+            for label, st in configs.items():
+                r = restir.render(bench.scene("many-lights", res), restir.RenderConfig(
+                    method="restir-di", spp=1, frames=FRAMES, seed=1, width=res, height=res, settings=st))
+                times[label].append(r.stats["ms_per_frame"])
+        ref = np.array(times[next(iter(configs))])
+        rows = {}
+        for label, st in configs.items():
+            ratio = np.array(times[label]) / ref
+            rows[label] = {"settings": st, "ms_per_frame": times[label], "ratio_to_03a4532": ratio.tolist(),
+                           "ratio_median": float(np.median(ratio))}
+            print(f"  {res}x{res} {label:<56} {np.median(times[label]):6.1f} ms/frame (median), ratio "
+                  f"{np.median(ratio):.3f} ({ratio.min():.3f}-{ratio.max():.3f})", flush=True)
+        out[str(res)] = rows
+    timing = bench.data.setdefault("rules_timing", {})  # by size: a run at other sizes keeps these
+    for res, rows in out.items():
+        timing[res] = {"proposal": {"rule_r1080": args.rule_r1080, "rule_floor": args.rule_floor, "cap": args.cap,
+                                    "rounds": args.rounds}, "more_rules": args.timing_rules, "repeats": repeats,
+                       "rows": rows}
+    bench.save()
 
 
 def phase_overflow(bench, frames=48, res=64):
@@ -464,7 +627,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--phase", nargs="+", default=["all"],
                     choices=["all", "main128", "res64", "res256", "small256", "cornell", "grey", "floor", "proposal",
-                             "overflow", "timing", "res512", "long", "defaults"])
+                             "overflow", "timing", "res512", "long", "defaults", "rules", "rules512", "candidates",
+                             "rules_timing"])
     ap.add_argument("--out", default=None, help="folder of the results JSON and the cached references")
     ap.add_argument("--json", default=None, help="results JSON (default: OUT/results.json)")
     ap.add_argument("--fresh", action="store_true", help="ignore cached rows in the JSON")
@@ -472,6 +636,10 @@ def main():
     ap.add_argument("--rule-floor", type=float, default=2.0, help="proposal: minimum radius in pixels")
     ap.add_argument("--cap", type=float, default=5.0, help="proposal: temporal.cap")
     ap.add_argument("--rounds", type=int, default=2, help="proposal: spatial.rounds")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[64, 128, 256], help="candidates: image sizes")
+    ap.add_argument("--repeats", type=int, default=5, help="rules_timing: alternating repeats")
+    ap.add_argument("--timing-rules", nargs="*", default=[], metavar="CAP,ROUNDS,R1080,FLOOR",
+                    help="rules_timing: more rules beside the proposal")
     args = ap.parse_args()
     OUT_DIR = args.out or OUT_DIR
     args.json = args.json or os.path.join(OUT_DIR, "results.json")
@@ -499,11 +667,18 @@ def main():
         t = time.perf_counter()
         if ph == "proposal":
             phase_proposal(bench, args)
+        elif ph == "rules_timing":
+            phase_rules_timing(bench, args)
+        elif ph == "candidates":
+            phase_candidates(bench, args)
+        elif ph == "rules512":
+            phase_rules(bench, sizes=(512,))
         else:
             {"main128": phase_main128, "res64": phase_res64, "res256": phase_res256, "cornell": phase_cornell,
              "grey": phase_grey, "small256": phase_small256, "floor": phase_floor,
              "timing": phase_timing, "res512": phase_res512,
-             "long": phase_long, "overflow": phase_overflow, "defaults": phase_defaults}[ph](bench)
+             "long": phase_long, "overflow": phase_overflow, "defaults": phase_defaults,
+             "rules": phase_rules}[ph](bench)
         print(f"-- phase {ph}: {time.perf_counter() - t:.0f} s (total {time.perf_counter() - t0:.0f} s)", flush=True)
     print(f"\nresults: {args.json}")
 
