@@ -159,8 +159,8 @@ def test_temporal_reuse_matches_direct_path_tracing(name, config, tmp_path):
     settings = {"candidates": 1 if name == "half-dark" else 4, "temporal": True, "temporal.cap": t["cap"],
                 "spatial.rounds": t["rounds"], "visibility": visibility,
                 "candidates.bsdf": 1 if visibility == "reuse" else 0}
-    # with spatial reuse in the default radius (2 px at this size) the image mean varies more from
-    # run to run than with the old 30 px (which averaged over the whole 24x24 image): more runs
+    # with spatial reuse in the default radius (5 px) the image mean varies more from run to run
+    # than with a 30 px disk (which averaged over the whole 24x24 image): more runs
     runs = 32 if t["rounds"] else 24
     di = independent_runs(scene, "restir-di", runs=runs, frames=8, spp=1, settings=settings)
     pt = independent_runs(scene, "pt", runs=runs, frames=8, spp=4, seed0=500)
@@ -278,8 +278,8 @@ SHARED = {"cornell-box": (8, 64), "veach-mis": (48, 256), "veach-bidir": (8, 64)
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(SHARED))
 def test_default_restir_di_on_shared_scenes(name):
-    """Default ReSTIR DI (32 light + 1 BSDF candidates, visibility-aware reuse, temporal cap 5,
-    3 neighbours x 2 rounds in the default radius) against direct
+    """Default ReSTIR DI (32 light + 1 BSDF candidates, visibility-aware reuse, temporal cap 2,
+    3 neighbours x 1 round in the default radius, 5 px) against direct
     path tracing on the shared scenes, 32 independent runs x 8 frames at 32x32."""
     from tests.shared_scenes import scene_path
 

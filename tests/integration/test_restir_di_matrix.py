@@ -47,7 +47,8 @@ MATRIX = {
     "C3-k2": ({**SPATIAL_ONLY, "spatial.neighbors": 2, "spatial.rounds": 1}, "none"),
     "C3-k4-rounds-3": ({**SPATIAL_ONLY, "spatial.neighbors": 4, "spatial.rounds": 3}, "none"),
     "C3-k8": ({**SPATIAL_ONLY, "spatial.neighbors": 8, "spatial.rounds": 1}, "none"),
-    "C3-k3-rounds-2-unshadowed": ({**SPATIAL_ONLY, "visibility": "shading", "candidates.bsdf": 0}, "none"),
+    "C3-k3-rounds-2-unshadowed": ({**SPATIAL_ONLY, "spatial.rounds": 2, "visibility": "shading",
+                                   "candidates.bsdf": 0}, "none"),
     # C4: temporal + spatial (the defaults), unshadowed, and with a moving camera
     "C4-defaults": ({}, "none"),
     "C4-unshadowed": ({"visibility": "shading", "candidates.bsdf": 0}, "none"),

@@ -154,6 +154,6 @@ def test_spatial_radius_rule():
 def test_default_radius_is_reported_in_pixels():
     scene = restir.load_scene("builtin:cornell-box", width=24, height=256)
     r = restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, frames=1))
-    assert r.stats["settings"]["spatial.radius"] == 15.0  # the 1080-line radius, not scaled down
+    assert r.stats["settings"]["spatial.radius"] == 5.0  # ReSTIR DI's 1080-line radius, not scaled down
     with pytest.raises(ConfigError):
         restir.render(scene, restir.RenderConfig(method="restir-di", spp=1, settings={"spatial.radius": "-3"}))

@@ -37,6 +37,25 @@ def test_overrides_are_parsed_and_checked():
         S.from_overrides({"candidates": "four"})
 
 
+def test_restir_di_defaults_and_the_path_methods_component():
+    """ReSTIR DI's own defaults (docs/changelog.md#restir-di-temporalcap2-spatialrounds1-5-px) and
+    those of the ReSTIR DI component of ReSTIR PT and Suffix ReSTIR, which were chosen apart and
+    differ: each with the "auto" radius `restir info` documents for it."""
+    S = METHODS["restir-di"].Settings
+    di = S()
+    assert (di.candidates, di.candidates_bsdf, di.temporal, di.temporal_cap) == (32, 1, True, 2.0)
+    assert (di.spatial.rounds, di.spatial.neighbors, di.spatial.radius) == (1, 3, "auto")
+    assert S().spatial.resolve_radius(128) == S().spatial.resolve_radius(1080) == 5.0
+    assert S().spatial.resolve_radius(2160) == 10.0
+    assert "auto: 5 px up to 1080 lines" in S.docs()["spatial.radius"]
+    for method in ("restir-pt", "suffix-restir"):
+        P = METHODS[method].Settings
+        c = P().di
+        assert (c.candidates, c.temporal_cap, c.spatial.rounds, c.spatial.neighbors) == (8, 5.0, 1, 3)
+        assert P().di.spatial.resolve_radius(128) == 15.0 and P().di.spatial.resolve_radius(2160) == 30.0
+        assert "auto: 15 px up to 1080 lines" in P.docs()["di.spatial.radius"]
+
+
 @pytest.mark.parametrize("method", ["restir-pt", "suffix-restir"])
 def test_di_settings_without_the_di_component_are_refused(method):
     """With direct=pt (ReSTIR PT's default) nothing reads the di.* settings: a changed one is

@@ -5,31 +5,41 @@ light, delta bounces to an emitter) to ReSTIR DI, run on the method's own primar
 G-buffers, filter weights and emission), with its stage times, counters and buffers reported
 under "di.". Its settings are the method's `di.*` settings.
 
-Lighter defaults than ReSTIR DI's own (32 light candidates, 2 spatial rounds): measured at equal
-time on the indirect room, veach-bidir and the glossy box
-(docs/changelog.md#restir-pts-restir-di-component-8-candidates-1-round),
-8 candidates and 1 round leave ReSTIR PT's error unchanged (within 0.3%) and its frame 17-33%
-cheaper: the direct light's share of the error is small beside the indirect paths'
-and the one camera sample's.
+The component has defaults of its own, not ReSTIR DI's: 8 light candidates and 1 spatial round,
+measured at equal time on the indirect room, veach-bidir and the glossy box
+(docs/changelog.md#restir-pts-restir-di-component-8-candidates-1-round): they leave ReSTIR PT's
+error unchanged (within 0.3%) against 32 candidates and 2 rounds, and its frame 17-33% cheaper,
+since the direct light's share of the error is small beside the indirect paths' and the one
+camera sample's. Its history cap (5) and spatial radius (15 px up to 1080 lines) are those ReSTIR
+PT's and Suffix ReSTIR's measurements ran with; ReSTIR DI's own (cap 2, 5 px) were chosen for
+ReSTIR DI alone (docs/changelog.md#restir-di-temporalcap2-spatialrounds1-5-px).
 """
 import copy
 import dataclasses
 
 from ...settings import component
+from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
 from ..restir_di.pipeline import DISettings, ReSTIRDI
 
 
+@dataclasses.dataclass
+class ComponentDISettings(DISettings):
+    """ReSTIR DI's settings as a path method's component: its own spatial radius (15 px up to 1080
+    lines, which `restir info` prints for di.spatial.radius) and 1 round; the other defaults that
+    differ from ReSTIR DI's are set by `di_component`."""
+    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=15.0, rounds=1)
+
+
 def di_component():
-    """The `di.*` settings field of a path-reuse method's settings: ReSTIR DI's, with the lighter
-    defaults above (8 candidates, 1 spatial round), without its fault injection."""
+    """The `di.*` settings field of a path-reuse method's settings: ReSTIR DI's, with the
+    component's defaults above (8 candidates, history cap 5, 1 spatial round in 15 px), without its
+    fault injection."""
     return component("di.", _path_method_di_defaults, "ReSTIR DI's ",
                      exclude=("debug.mutation", "emission.rays", "emission.adaptive"))
 
 
 def _path_method_di_defaults() -> DISettings:
-    s = DISettings(candidates=8)
-    s.spatial.rounds = 1
-    return s
+    return ComponentDISettings(candidates=8, temporal_cap=5.0)
 
 
 def di_settings(settings) -> DISettings:

@@ -35,13 +35,17 @@ MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
 })
 
 
-# Defaults chosen by measurement with a jittered camera (docs/changelog.md#restir-di-temporalcap5-spatialradiusauto): 32
-# light candidates; temporal reuse with the history capped at 5x the current confidence (the
-# literature's 20x drifts into blotches); spatial reuse with 3 neighbours, 2 rounds, in a radius of
-# 15 px up to 1080 lines, scaled with the image height above (the literature's 30 px at any size
-# left reuse nearly idle on small images; scaled down with the height as well, to 2 px at 128
-# lines, the copies spatial reuse makes lay next to each other, which a denoiser keeps:
-# docs/changelog.md#the-spatial-radius-in-pixels).
+# Defaults chosen by ReSTIR DI's own measurement (docs/changelog.md#restir-di-temporalcap2-spatialrounds1-5-px;
+# benchmarks/bench_di_defaults.py, phases rules, candidates and rules_timing): 32 light candidates;
+# temporal reuse with the history capped at 2x the current confidence; one spatial round of 3
+# neighbours in a disk of 5 px up to 1080 lines, scaled with the image height above. On the
+# many-light room and the Cornell box (emitters hidden) at 64, 128 and 256 lines, two seeds, reuse
+# lowers the per-frame error more with these than with cap 5, 2 rounds and 15 px (many lights at
+# 128 lines: 2.04x against no reuse, was 1.72x), as much or more after Open Image Denoise (there
+# 1.11x either way), at 0.82-0.95x the frame time. Smaller disks lower the raw error further
+# (2 px: 2.27x) but put the copies spatial reuse makes side by side, which the denoiser keeps:
+# after it, 2 px gave 0.63x, worse than no reuse. ReSTIR PT's and Suffix ReSTIR's ReSTIR DI
+# component keeps its own defaults (path_reuse/direct_light.py).
 @dataclasses.dataclass
 class DISettings(Settings):
     candidates: int = setting("candidates", 32, "light-sampled candidates N_L of the initial RIS")
@@ -50,9 +54,9 @@ class DISettings(Settings):
     visibility: str = setting("visibility", "reuse", "reuse: visibility-aware targets (a visibility stage); "
                               "shading: V traced at shading only")
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs")
-    temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one "
+    temporal_cap: float = setting("temporal.cap", 2.0, "history confidence capped to this x the current one "
                                   "(<= 0: no cap, i.e. 1e6 x)")
-    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=15.0, rounds=2)
+    spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=5.0, rounds=1)
     stages_split: bool = setting("stages.split", False, "initial RIS, visibility and temporal reuse as three "
                                  "kernels, each timed (they run fused otherwise; the same images bit for bit), "
                                  "with a third reservoir buffer (+24 B per pixel)", static=True)
