@@ -131,7 +131,7 @@ def render_status_table(results: dict) -> str:
                 row.append(_pays(_head(scene, method)))
         rows.append(row)
     cost = results.get("cost", {})
-    lines = _table(header, rows)
+    lines = _table(header, rows) + [""] + _pays_summary(results, scenes)
     quick = " A quick run (`--quick`): small images and budgets." if results.get("mode") == "quick" else ""
     m = results.get("machine", {})
     lines += ["", f"Frame cost: a frame's time over a 1-spp path-tracer frame ({cost.get('scene', '-')}, "
@@ -139,6 +139,41 @@ def render_status_table(results: dict) -> str:
               f"Measured on {m.get('cpu', '-')} "
               f"({m.get('cores', '-')} cores) at commit `{results.get('commit', {}).get('hash', '')[:10]}`.{quick}"]
     return "\n".join(lines)
+
+
+def _scenes(n: int) -> str:
+    return f"{n} scene{'s' if n != 1 else ''}"
+
+
+def _pays_summary(results: dict, scenes: list) -> list:
+    """One line per method under the table: on how many of the scenes it was compared on it pays,
+    with the range of its factors, and what its frame costs."""
+    out = []
+    for method in STATUS_METHODS:
+        if method == "pt":
+            continue
+        factors = [(title, h["denoised_frame"]) for _, title, scene in scenes
+                   if (h := _head(scene, method)) and h.get("denoised_frame") is not None]
+        if not factors:
+            continue
+        cost = _cost_row(results, method)
+        frame = f", at {_ratio(cost['ratio_median'])} a path-tracer frame" if cost else ""
+        paid = [(t, f) for t, f in factors if f > 1]
+        if paid:
+            lo, hi = min(f for _, f in paid), max(f for _, f in paid)
+            span = _ratio(lo) if lo == hi else f"{_ratio(lo)} to {_ratio(hi)}"
+            where = ", ".join(t for t, _ in paid)
+            out.append(f"- {METHOD_NAMES[method]} pays on {len(paid)} of the {_scenes(len(factors))} it was compared on "
+                       f"({where}: the path tracer's denoised error {span} its own){frame}.")
+        else:
+            best_title, best = max(factors, key=lambda x: x[1])
+            if len(factors) == 1:
+                out.append(f"- {METHOD_NAMES[method]} does not pay on the one scene it was compared on "
+                           f"({best_title}, {_ratio(best)}){frame}.")
+            else:
+                out.append(f"- {METHOD_NAMES[method]} pays on none of the {_scenes(len(factors))} it was compared on "
+                           f"(closest: {best_title}, {_ratio(best)}){frame}.")
+    return out
 
 
 def update_readme(readme_text: str, table: str) -> str:
