@@ -375,6 +375,14 @@ def part_loads(args, size) -> dict:
 
 
 # ------------------------------------------------------------------ (f) the matrix verdicts
+def matrix_size(path: str) -> int | None:
+    """How many cells the slow tier's matrix file has (pytest's collection), so that the page can
+    say how many of them a recording covers."""
+    p = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-m", "slow", "-p", "no:xdist", path],
+                       capture_output=True, text=True, cwd=ROOT)
+    return sum("::" in line for line in p.stdout.splitlines()) if p.returncode == 0 else None
+
+
 def part_verdicts(args, size) -> dict:
     out = {"source": VERDICTS, "how": "RESTIR_RECORD_VERDICTS=benchmarks/results/verdicts.json "
            ".venv/bin/pytest -q -m slow tests/integration/test_restir_di_matrix.py "
@@ -391,7 +399,9 @@ def part_verdicts(args, size) -> dict:
     for path, rs in sorted(files.items()):
         mdbs = [r["mdb"] for r in rs if r.get("mdb") is not None]
         summary.append({
-            "file": path, "cells": len(rs), **{v: sum(r.get("verdict") == v for r in rs) for v in ("pass", "fail", "error")},
+            "file": path, "cells": len(rs), "cells_total": matrix_size(path),
+            **{v: sum(r.get("verdict") == v for r in rs) for v in ("pass", "fail", "error")},
+            "recorded": [{k: r.get(k) for k in ("test", "verdict", "mdb", "bound")} for r in rs],
             "scope": sorted({r.get("scope", "?") for r in rs}), "mdb_max": max(mdbs) if mdbs else None,
             "commits": sorted({r.get("commit", "")[:10] for r in rs}), "dirty": any(r.get("dirty") for r in rs),
             "first": min(r.get("time", "") for r in rs), "last": max(r.get("time", "") for r in rs),

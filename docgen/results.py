@@ -320,21 +320,30 @@ def _verdicts(results: dict) -> list:
     for f in v["files"]:
         scope = "whole cell" if f["scope"] == ["cell"] else "z-tests" if f["scope"] == ["z-tests"] else \
             ", ".join(f["scope"])
-        rows.append([f"`{f['file']}`", f["cells"], f["pass"], f["fail"], f["error"], _num(f["mdb_max"], "{:.2%}"),
+        total = f.get("cells_total")
+        cells = f"{f['cells']} of {total}" if total else f["cells"]
+        rows.append([f"`{f['file']}`", cells, f["pass"], f["fail"], f["error"], _num(f["mdb_max"], "{:.2%}"),
                      scope, ", ".join(f"`{c}`" for c in f["commits"]) + (" (uncommitted changes)" if f["dirty"] else ""),
                      f"{_date(f['first'])} to {_date(f['last'])}"])
     lines = ["Each matrix cell's verdict from its latest recorded run. A whole cell's verdict takes in its "
              "soundness checks, its z-tests and its bound on the minimum detectable bias (MDB); ReSTIR DI's "
              "matrix records its z-tests, and asserts its MDB bound after them.", ""]
-    lines += _table(["matrix", "cells", "pass", "fail", "error", "largest MDB", "verdict of", "commits", "recorded"],
-                    rows)
+    lines += _table(["matrix", "cells recorded", "pass", "fail", "error", "largest MDB", "verdict of", "commits",
+                     "recorded"], rows)
+    partial = [f for f in v["files"] if f.get("cells_total") and f["cells"] < f["cells_total"] and f.get("recorded")]
+    if partial:
+        lines += ["", "Where only some of a matrix's cells are recorded, these are they:", ""]
+        lines += _table(["cell", "verdict", "MDB", "bound"],
+                        [[f"`{r['test'].split('::')[-1]}`", r["verdict"], _num(r["mdb"], "{:.2%}"),
+                          _num(r["bound"], "{:.0%}")] for f in partial for r in f["recorded"]])
     failed = [r for f in v["files"] for r in f["not_passed"]]
     if failed:
         lines += ["", "Cells that did not pass:", ""]
         lines += _table(["test", "verdict", "MDB", "bound", "message"],
                         [[f"`{r['test']}`", r["verdict"], _num(r["mdb"], "{:.2%}"), _num(r["bound"], "{:.0%}"),
                           (r["message"] or "").replace("|", "\\|")] for r in failed])
-    return lines + ["", "Recorded with:", "", *_command(v["how"])]
+    return lines + ["", "Recorded with the command below (all cells; a `-k` expression records some of them):", "",
+                    *_command(v["how"])]
 
 
 def render_results_page(results: dict) -> str:
