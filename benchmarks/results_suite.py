@@ -49,6 +49,8 @@ import sys
 import time
 import warnings
 
+import numpy as np
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
@@ -275,20 +277,58 @@ def part_equal_time(args, size) -> dict:
         h = size["lines"]
         w = int(round(h * cam.width / cam.height / 2)) * 2
         json_out = os.path.join(LOGS, f"equal_time_{name}.json")
+        report = os.path.join(LOGS, f"report_{name}")
         argv = ["compare", path if path.startswith("builtin:") else shown_path(path)]
         for m in EQUAL_TIME_METHODS:
             argv += ["--method", m]
         argv += ["--equal-time", f"{size['seconds']:g}", "--width", str(w), "--height", str(h),
                  "--reference-spp", str(size["reference_spp"]), "--warmup", str(size["warmup"]), "--seed", "0",
-                 "--denoise", "--correlation-runs", "0", "--quiet", "--json", json_out]
+                 "--denoise", "--correlation-runs", "0", "--quiet", "--json", json_out, "--report", report]
         log(f"equal time: {title} {w}x{h}, {size['seconds']:g} s a method: {RESTIR} {shlex.join(argv)}")
         code = run_cli(argv, f"equal_time_{name}.log")
         if code != 0:
             raise SystemExit(f"restir compare failed on {title} (exit {code}); see {LOGS}/equal_time_{name}.log")
         with open(json_out) as f:
             rows.append({"name": name, "title": title, "scene": argv[1], "command": shlex.join([RESTIR, *argv]),
-                         **summarize_comparison(json.load(f))})
+                         "gallery": gallery_image(report, name), **summarize_comparison(json.load(f))})
     return {"methods": EQUAL_TIME_METHODS, "seconds": size["seconds"], "lines": size["lines"], "scenes": rows}
+
+
+GALLERY_GAP = 4  # px of white between the gallery's images
+
+
+def gallery_image(report: str, name: str) -> dict:
+    """The gallery image of one equal-time scene, from the images `restir compare --report` wrote:
+    the reference, then each method's last frame (top row) and the same frame through Open Image
+    Denoise (bottom row), tonemapped at exposure 0, side by side: docs/images/results/gallery_<name>.jpg."""
+    from PIL import Image
+
+    from restir.image_io import linear_to_srgb, read_exr
+
+    with open(os.path.join(report, "images.json")) as f:
+        listing = json.load(f)
+
+    def tile(method: str, kind: str):
+        entry = next((e for e in listing if e["method"] == method and e["kind"] == kind), None)
+        if entry is None:
+            return None
+        x = np.nan_to_num(read_exr(os.path.join(report, entry["file"])), nan=0.0, posinf=0.0, neginf=0.0)
+        return Image.fromarray((linear_to_srgb(np.clip(x, 0.0, None)) * 255.0 + 0.5).astype(np.uint8))
+
+    reference = tile("reference", "accumulated")
+    # the compared methods (the path tracer rendered at their frame times, `pt:spp=N`, stays out)
+    methods = [e["method"] for e in listing if e["kind"] == "frame" and ":" not in e["method"]]
+    columns = [(reference, reference)] + [(tile(m, "frame"), tile(m, "denoised")) for m in methods]
+    w, h = reference.size
+    out = Image.new("RGB", (len(columns) * (w + GALLERY_GAP) - GALLERY_GAP, 2 * h + GALLERY_GAP), "white")
+    for i, (top, bottom) in enumerate(columns):
+        for j, img in enumerate((top, bottom)):
+            if img is not None:
+                out.paste(img, (i * (w + GALLERY_GAP), j * (h + GALLERY_GAP)))
+    path = os.path.join("docs", "images", "results", f"gallery_{name}.jpg")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    out.save(path, quality=88)
+    return {"file": path, "columns": ["reference", *methods]}
 
 
 def part_many_lights(args, size) -> dict:

@@ -132,6 +132,10 @@ def render_status_table(results: dict) -> str:
         rows.append(row)
     cost = results.get("cost", {})
     lines = _table(header, rows) + [""] + _pays_summary(results, scenes)
+    galleries = [s for s in results.get("equal_time", {}).get("scenes", []) if s.get("gallery")]
+    if galleries:
+        lines += ["", "At equal time, " + _gallery_caption(galleries[0])[0].lower() + _gallery_caption(galleries[0])[1:], ""]
+        lines += [f"![{s['title']}]({s['gallery']['file']})" for s in galleries]
     quick = " A quick run (`--quick`): small images and budgets." if results.get("mode") == "quick" else ""
     m = results.get("machine", {})
     lines += ["", f"Frame cost: a frame's time over a 1-spp path-tracer frame ({cost.get('scene', '-')}, "
@@ -263,7 +267,17 @@ def _equal_time(results: dict) -> list:
         depth = "unbounded" if depth is not None and depth < 0 else depth
         lines += [f"`{s['scene']}` at {s['width']}x{s['height']}, max_depth {depth} (the scene's), {s['budget']}.", ""]
         lines += _comparison(s) + ["", *_command(s["command"]), ""]
+        if s.get("gallery"):
+            lines += [_gallery_caption(s), "", f"![{s['title']}: {', '.join(s['gallery']['columns'])}]"
+                      f"({os.path.relpath(s['gallery']['file'], 'docs')})", ""]
     return lines[:-1]
+
+
+def _gallery_caption(scene: dict) -> str:
+    names = ["the path tracer" if c == "pt" else METHOD_NAMES.get(c.partition(":")[0], c)
+             for c in scene["gallery"]["columns"][1:]]
+    return (f"Left to right: the reference, then {', '.join(names)}; top row: each method's last frame, bottom "
+            "row: the same frame through Open Image Denoise (the reference repeated on the left).")
 
 
 def _many_lights(results: dict) -> list:
