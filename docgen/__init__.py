@@ -1,1 +1,2 @@
-"""Generators of the documentation site's pages from their single sources (the argument parsers, the typed settings, the results JSON)."""
+"""Generators of the documentation site's pages from their single sources (the argument parsers,
+the typed settings, the results JSON)."""

@@ -134,7 +134,8 @@ def render_status_table(results: dict) -> str:
     lines = _table(header, rows) + [""] + _pays_summary(results, scenes)
     galleries = [s for s in results.get("equal_time", {}).get("scenes", []) if s.get("gallery")]
     if galleries:
-        lines += ["", "At equal time, " + _gallery_caption(galleries[0])[0].lower() + _gallery_caption(galleries[0])[1:], ""]
+        caption = _gallery_caption(galleries[0])
+        lines += ["", f"At equal time, {caption[0].lower()}{caption[1:]}", ""]
         lines += [f"![{s['title']}]({s['gallery']['file']})" for s in galleries]
     quick = " A quick run (`--quick`): small images and budgets." if results.get("mode") == "quick" else ""
     m = results.get("machine", {})
@@ -167,7 +168,8 @@ def _pays_summary(results: dict, scenes: list) -> list:
             lo, hi = min(f for _, f in paid), max(f for _, f in paid)
             span = _ratio(lo) if lo == hi else f"{_ratio(lo)} to {_ratio(hi)}"
             where = ", ".join(t for t, _ in paid)
-            out.append(f"- {METHOD_NAMES[method]} pays on {len(paid)} of the {_scenes(len(factors))} it was compared on "
+            out.append(f"- {METHOD_NAMES[method]} pays on {len(paid)} of the {_scenes(len(factors))} it was "
+                       f"compared on "
                        f"({where}: the path tracer's denoised error {span} its own){frame}.")
         else:
             best_title, best = max(factors, key=lambda x: x[1])
@@ -336,9 +338,9 @@ def _verdicts(results: dict) -> list:
             ", ".join(f["scope"])
         total = f.get("cells_total")
         cells = f"{f['cells']} of {total}" if total else f["cells"]
+        commits = ", ".join(f"`{c}`" for c in f["commits"]) + (" (uncommitted changes)" if f["dirty"] else "")
         rows.append([f"`{f['file']}`", cells, f["pass"], f["fail"], f["error"], _num(f["mdb_max"], "{:.2%}"),
-                     scope, ", ".join(f"`{c}`" for c in f["commits"]) + (" (uncommitted changes)" if f["dirty"] else ""),
-                     f"{_date(f['first'])} to {_date(f['last'])}"])
+                     scope, commits, f"{_date(f['first'])} to {_date(f['last'])}"])
     lines = ["Each matrix cell's verdict from its latest recorded run. A whole cell's verdict takes in its "
              "soundness checks, its z-tests and its bound on the minimum detectable bias (MDB); ReSTIR DI's "
              "matrix records its z-tests, and asserts its MDB bound after them.", ""]

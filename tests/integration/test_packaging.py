@@ -34,8 +34,8 @@ def test_wheel_installs_and_renders(tmp_path):
     src = tmp_path / "src"
     shutil.copytree(ROOT, src, ignore=SKIP)
     dist = tmp_path / "dist"
-    build = subprocess.run([sys.executable, "-m", "build", "--wheel", "--no-isolation", "--outdir", str(dist), str(src)],
-                           capture_output=True, text=True, timeout=300)
+    build = subprocess.run([sys.executable, "-m", "build", "--wheel", "--no-isolation", "--outdir", str(dist),
+                            str(src)], capture_output=True, text=True, timeout=300)
     assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
     assert "License classifiers are deprecated" not in build.stderr and "project.license" not in build.stderr
     wheels = list(dist.glob("restir-*.whl"))
@@ -66,9 +66,9 @@ def test_wheel_installs_and_renders(tmp_path):
     out = work / "cb.npy"
     # the installed console script, run by the fresh interpreter (pip wrote the test environment's
     # interpreter into its first line)
-    run = subprocess.run([str(py), str(pathlib.Path(site) / "bin" / "restir"), "render", "builtin:cornell-box", "--spp", "4", "--width", "32",
-                          "--height", "32", "-o", str(out), "--quiet"], cwd=work, env=env, capture_output=True,
-                         text=True, timeout=600)
+    run = subprocess.run([str(py), str(pathlib.Path(site) / "bin" / "restir"), "render", "builtin:cornell-box",
+                          "--spp", "4", "--width", "32", "--height", "32", "-o", str(out), "--quiet"],
+                         cwd=work, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     image = np.load(out)
     assert image.shape == (32, 32, 3) and np.isfinite(image).all()

@@ -24,7 +24,8 @@ OUTSIDE_NOTES = re.compile(r"\b(ALGORITHMS|TESTING|DESIGN|STYLE|ANCHORS|BENCHMAR
 OUTSIDE_PATH = re.compile(r"\.\./shared(?!/scenes\b)|/work/")
 WORK_ITEMS = re.compile(r"\b(issues?\s*#?\d+|stops?\s+\d+|the issue\b|(this|last|next|previous) session\b|"
                         r"sessions?\s+\d+|first look|second look|third look)", re.I)
-SESSION_IN_PROSE = re.compile(r"\bsessions?\b", re.I)  # in Markdown: no diary words at all (pytest's scope="session" is code)
+# in Markdown, no diary words at all (in Python, pytest's scope="session" is code)
+SESSION_IN_PROSE = re.compile(r"\bsessions?\b", re.I)
 DOC_PATH = re.compile(r"\bdocs/[\w/.-]+?\.(?:md|py)\b")
 
 

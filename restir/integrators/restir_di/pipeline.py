@@ -42,7 +42,8 @@ MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
 # many-light room and the Cornell box (emitters hidden) at 64, 128 and 256 lines, two seeds, reuse
 # lowers the per-frame error more with these than with cap 5, 2 rounds and 15 px (many lights at
 # 128 lines: 2.04x against no reuse, was 1.72x), as much or more after Open Image Denoise (there
-# 1.11x either way), at 0.82-0.95x the frame time. Smaller disks lower the raw error further
+# 1.11x either way), at 0.82-0.90x the frame time (medians of alternating runs). Smaller disks
+# lower the raw error further
 # (2 px: 2.27x) but put the copies spatial reuse makes side by side, which the denoiser keeps:
 # after it, 2 px gave 0.63x, worse than no reuse. ReSTIR PT's and Suffix ReSTIR's ReSTIR DI
 # component keeps its own defaults (path_reuse/direct_light.py).
