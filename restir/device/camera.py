@@ -3,12 +3,18 @@
 Mitsuba's camera looks down +z of its local frame with +y up and +x toward the image's left.
 The reconstruction filter is sampled (FIS): a sample's offset from the pixel centre is drawn
 from the filter, and `CameraRay.weight` carries f/p where the filter is not sampled exactly.
+
+A thin lens (Mitsuba 3's `thinlens`; aperture_radius > 0) starts each ray at a point drawn
+uniformly on the aperture disc (concentric map) and aims it at the point of the plane in focus
+(at focus_distance along the view axis) that the pinhole ray through the same image position
+reaches; its weight is 1, as Mitsuba's. The aperture's numbers come from a stream of their own
+(STAGE_LENS), so a pinhole camera's rays do not change.
 """
 import warp as wp
 
 from .rng import rng_key, rng_uniform2
-from .sampling import sample_cdf, sample_tent
-from .streams import STAGE_CAMERA
+from .sampling import sample_cdf, sample_tent, square_to_uniform_disk_concentric
+from .streams import STAGE_CAMERA, STAGE_LENS
 from .types import FILTER_BOX, FILTER_TENT
 
 
@@ -33,6 +39,8 @@ class Camera:
     # a pixel sees one fixed primary hit and the image is the radiance at the centres (aliased
     # edges), as in the Suffix ReSTIR paper's evaluation. RenderConfig.jitter.
     jitter: int
+    aperture_radius: float  # thin lens; 0: a pinhole
+    focus_distance: float   # the plane in focus, along the view axis
 
 
 @wp.struct
@@ -66,7 +74,9 @@ def sample_filter_1d(cam: Camera, u: float) -> wp.vec2:
 
 
 @wp.func
-def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
+def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2, u_lens: wp.vec2) -> CameraRay:
+    """The ray through image position u of pixel (px, py), from aperture position u_lens (unused
+    by a pinhole)."""
     fx = wp.vec2(0.0, 1.0)
     fy = wp.vec2(0.0, 1.0)
     if cam.jitter != 0:
@@ -76,9 +86,15 @@ def generate_ray(cam: Camera, px: int, py: int, u: wp.vec2) -> CameraRay:
     sy = (float(py) + 0.5 + fy[0]) / float(cam.height)
     d_local = wp.vec3((1.0 - 2.0 * sx) * cam.tan_half_x, (1.0 - 2.0 * sy) * cam.tan_half_y, 1.0)
     r = CameraRay()
+    r.weight = fx[1] * fy[1]
+    if cam.aperture_radius > 0.0:
+        a = square_to_uniform_disk_concentric(u_lens) * cam.aperture_radius
+        on_lens = wp.vec3(a[0], a[1], 0.0)
+        r.o = wp.transform_point(cam.to_world, on_lens)
+        r.d = wp.normalize(wp.transform_vector(cam.to_world, d_local * cam.focus_distance - on_lens))
+        return r
     r.o = wp.transform_point(cam.to_world, wp.vec3(0.0, 0.0, 0.0))
     r.d = wp.normalize(wp.transform_vector(cam.to_world, d_local))
-    r.weight = fx[1] * fy[1]
     return r
 
 
@@ -88,13 +104,21 @@ def camera_ray(cam: Camera, seed: wp.uint32, frame: wp.uint32, pixel: int, sampl
     camera stream (stage STAGE_CAMERA), so renders with the same seed share their camera
     samples: comparisons between methods can use common random numbers (the directly seen
     emission, the same estimator everywhere, then cancels out of the difference)."""
-    return generate_ray(cam, pixel % cam.width, pixel // cam.width, camera_u(seed, frame, pixel, sample))
+    return generate_ray(cam, pixel % cam.width, pixel // cam.width, camera_u(seed, frame, pixel, sample),
+                        lens_u(seed, frame, pixel, sample))
 
 
 @wp.func
 def camera_u(seed: wp.uint32, frame: wp.uint32, pixel: int, sample: int) -> wp.vec2:
     """The two uniform numbers camera_ray turns into the sample's position in the pixel."""
     key = rng_key(seed, frame, wp.uint32(STAGE_CAMERA), wp.uint32(pixel))
+    return rng_uniform2(key, wp.uint32(2) * wp.uint32(sample))
+
+
+@wp.func
+def lens_u(seed: wp.uint32, frame: wp.uint32, pixel: int, sample: int) -> wp.vec2:
+    """The two uniform numbers camera_ray turns into the sample's position on the aperture."""
+    key = rng_key(seed, frame, wp.uint32(STAGE_LENS), wp.uint32(pixel))
     return rng_uniform2(key, wp.uint32(2) * wp.uint32(sample))
 
 

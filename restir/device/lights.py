@@ -1,15 +1,20 @@
-"""Light sampling (NEE) and emission lookup for area emitters and environment emitters.
+"""Light sampling (NEE) and emission lookup for area emitters, delta lights and the environment.
 
-Area emitters: a triangle is chosen in proportion to its power (alias table), then a point
-uniformly by area; the density is converted to solid angle at the shading point. The
-environment (constant or lat-long map, Mitsuba's mapping) is chosen with env_select_prob.
+The environment (constant or lat-long map, Mitsuba's mapping) is chosen with env_select_prob;
+otherwise one alias table chooses among the emissive triangles and the delta lights in
+proportion to power (scene/upload.py). Area emitters: then a point uniformly by area; the
+density is converted to solid angle at the shading point. Delta lights (delta_lights.py): the
+sample's `pdf` is the light's selection probability, a probability in the light's own delta
+measure, and `Le` what it sends toward the point; BSDF sampling never finds one, so its MIS
+weight is 1.
 """
 import warp as wp
 
+from .delta_lights import delta_arrival, delta_light_index, is_delta_light
 from .intersect import surface_at
 from .sampling import sample_alias, sample_cdf, square_to_uniform_sphere, square_to_uniform_triangle
 from .scene_device import SceneDevice
-from .types import ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, LIGHT_ENV, PI
+from .types import DELTA_DIRECTIONAL, ENV_CONSTANT, ENV_MAP, ENV_NONE, INV_FOUR_PI, LIGHT_ENV, PI
 
 
 @wp.struct
@@ -20,10 +25,13 @@ class LightSample:
     bary: wp.vec2    # its barycentrics in surface_at's convention: (tri, bary) reproduces p, n, ns exactly
     n: wp.vec3       # geometric normal at the light point
     ns: wp.vec3      # shading normal at the light point (decides the emitting side)
-    tri: int         # emissive triangle, LIGHT_ENV for the environment
-    Le: wp.vec3      # emitted radiance toward the shading point
-    pdf: float       # solid-angle density, selection probability included; 0 = failed
+    tri: int         # emissive triangle, LIGHT_ENV for the environment, a delta light's identity
+    Le: wp.vec3      # emitted radiance toward the shading point (a delta light's: delta_lights.py)
+    pdf: float       # solid-angle density, selection probability included (a delta light: that
+                     # probability alone); 0 = failed
     is_env: int
+    is_delta: int    # a delta light: reached by light sampling only (MIS weight 1)
+    infinite: int    # the light is at infinity (the environment, a directional light): an unbounded shadow ray
 
 
 # ----------------------------------------------------------------------------- environment
@@ -109,6 +117,7 @@ def env_pdf(scene: SceneDevice, d_world: wp.vec3) -> float:
 def sample_env(scene: SceneDevice, u: wp.vec2) -> LightSample:
     ls = LightSample()
     ls.is_env = 1
+    ls.infinite = 1
     ls.tri = LIGHT_ENV
     ls.dist = 1.0e30
     ls.pdf = 0.0
@@ -153,12 +162,10 @@ def triangle_light_pdf(scene: SceneDevice, tri: int, ng: wp.vec3, w_to_light: wp
 
 
 @wp.func
-def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.vec2) -> LightSample:
+def sample_triangle_light(scene: SceneDevice, x: wp.vec3, tri: int, u: wp.vec2) -> LightSample:
+    """A point uniformly by area on emissive triangle `tri` (already chosen)."""
     ls = LightSample()
-    ls.is_env = 0
     ls.pdf = 0.0
-    k = sample_alias(scene.light_prob, scene.light_alias, u_sel)
-    tri = int(scene.light_tri[k])
     ls.tri = tri
     b = square_to_uniform_triangle(u)  # weights of vertices 1 and 2
     # the point through surface_at, so that a sample stored as (tri, bary) is this point bit for bit
@@ -178,14 +185,46 @@ def sample_triangle_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.ve
     return ls
 
 
+# ----------------------------------------------------------------------------- delta lights
+@wp.func
+def delta_light_probability(scene: SceneDevice, light_id: int) -> float:
+    """The probability that light sampling picks this delta light (its `pdf`: delta measure)."""
+    return (1.0 - scene.env_select_prob) * scene.delta_light_pmf[delta_light_index(light_id)]
+
+
+@wp.func
+def sample_delta_light(scene: SceneDevice, x: wp.vec3, light_id: int) -> LightSample:
+    """The connection from x to a delta light (already chosen): nothing left to sample."""
+    ls = LightSample()
+    ls.pdf = 0.0
+    ls.tri = light_id
+    ls.is_delta = 1
+    l = scene.delta_lights[delta_light_index(light_id)]
+    a = delta_arrival(l, x)
+    if a.dist <= 0.0:
+        return ls
+    ls.infinite = wp.where(l.kind == DELTA_DIRECTIONAL, 1, 0)
+    ls.wi = a.wi
+    ls.dist = a.dist
+    ls.p = l.p
+    ls.Le = a.Le
+    ls.pdf = delta_light_probability(scene, light_id)
+    return ls
+
+
 @wp.func
 def sample_light(scene: SceneDevice, x: wp.vec3, u_sel: float, u: wp.vec2) -> LightSample:
-    """One light sample for NEE. u_sel picks env vs. triangles and then the triangle."""
-    if scene.env_kind != ENV_NONE and (scene.num_tri_lights == 0 or u_sel < scene.env_select_prob):
+    """One light sample for NEE. u_sel picks the environment or the alias table, and then the
+    table's light (an emissive triangle or a delta light)."""
+    num_lights = scene.num_tri_lights + scene.num_delta_lights
+    if scene.env_kind != ENV_NONE and (num_lights == 0 or u_sel < scene.env_select_prob):
         return sample_env(scene, u)
-    if scene.num_tri_lights == 0:
+    if num_lights == 0:
         ls = LightSample()
         ls.pdf = 0.0
         return ls
     u2 = wp.where(scene.env_kind != ENV_NONE, (u_sel - scene.env_select_prob) / (1.0 - scene.env_select_prob), u_sel)
-    return sample_triangle_light(scene, x, wp.min(u2, 0.99999994), u)
+    light_id = int(scene.light_tri[sample_alias(scene.light_prob, scene.light_alias, wp.min(u2, 0.99999994))])
+    if is_delta_light(light_id):
+        return sample_delta_light(scene, x, light_id)
+    return sample_triangle_light(scene, x, light_id, u)

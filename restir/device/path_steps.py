@@ -42,8 +42,10 @@ class LightConnection:
     L: wp.vec3        # this light sample's share of the vertex's NEE estimate: f Le V w / (N p_light)
     Le: wp.vec3       # emitted radiance arriving along wi (0 when the sample failed)
     wi: wp.vec3       # unit world direction toward the light
-    p_light: float    # solid-angle density of the light sample, selection included (0: failed)
-    p_bsdf: float     # BSDF sampling density of wi (for MIS; 0 unless strategy is MIS)
+    p_light: float    # solid-angle density of the light sample, selection included (0: failed);
+                      # a delta light's selection probability
+    p_bsdf: float     # BSDF sampling density of wi (for MIS; 0 unless strategy is MIS; 0 for a delta light)
+    is_delta: int     # the light is a delta light: no other technique reaches it, MIS weight 1
     rays: int         # shadow rays traced (0 or 1)
 
 
@@ -55,15 +57,18 @@ def connect_to_light(scene: SceneDevice, hit: SurfaceHit, mat: Material, frame: 
     ls = sample_light(scene, hit.p, u_select, u_point)
     c.wi = ls.wi
     c.p_light = ls.pdf
-    if ls.pdf > 0.0 and max3(ls.Le) > 0.0:
+    c.is_delta = ls.is_delta
+    # BSDF sampling never reaches a delta light, so the BSDF-only estimator has no term for it:
+    # its light is NEE's alone whatever the strategy (the set of techniques is the light's kind)
+    if ls.pdf > 0.0 and max3(ls.Le) > 0.0 and (strategy != STRATEGY_BSDF or ls.is_delta != 0):
         wo = to_local(frame, ls.wi)
         f = bsdf_eval(mat, wi, wo)
         if max3(f) > 0.0:
             c.rays = 1
-            if visible_to_light(scene, hit.p, hit.ng, ls.wi, ls.p, ls.n, ls.is_env):
+            if visible_to_light(scene, hit.p, hit.ng, ls.wi, ls.p, ls.n, ls.infinite):
                 c.Le = ls.Le
                 p_sum = float(light_samples) * ls.pdf
-                if strategy == STRATEGY_MIS:
+                if strategy == STRATEGY_MIS and ls.is_delta == 0:
                     c.p_bsdf = bsdf_pdf(mat, wi, wo)
                     p_sum += c.p_bsdf
                 c.L = wp.cw_mul(f, ls.Le) / p_sum

@@ -7,6 +7,7 @@ import warp as wp
 
 from .bsdf import Material
 from .bump import Bump
+from .delta_lights import DeltaLight
 from .textures import Texture, scalar_of, texture_eval
 
 
@@ -28,11 +29,16 @@ class SceneDevice:
     # opacity (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
     material_textures: wp.array(dtype=wp.vec4i)
     material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
-    # Emissive triangles, chosen in proportion to power by a Walker alias table.
+    # The lights other than the environment, chosen in proportion to power by one Walker alias
+    # table: light_tri holds the emissive triangles first (num_tri_lights of them), then the delta
+    # lights' identities (delta_lights.delta_light_id)
     light_tri: wp.array(dtype=wp.int32)
     light_prob: wp.array(dtype=float)
     light_alias: wp.array(dtype=wp.int32)
     num_tri_lights: int
+    delta_lights: wp.array(dtype=DeltaLight)
+    delta_light_pmf: wp.array(dtype=float)  # P(select delta light i | not the environment)
+    num_delta_lights: int
     # Environment: constant or lat-long map, importance-sampled by a 2-D piecewise-constant pdf.
     env_kind: int
     env_radiance: wp.vec3                  # constant emitter radiance / envmap scale

@@ -12,6 +12,7 @@ import warp as wp
 
 # ----------------------------------------------------------------------------- stage ids
 STAGE_CAMERA = wp.constant(0)      # camera rays of every method (common random numbers)
+STAGE_LENS = wp.constant(2)        # the thin lens's aperture samples (kept apart: pinhole images do not change)
 STAGE_PATH_TRACE = wp.constant(1)  # the path tracer's paths (and its first light sample per vertex)
 STAGE_DI_INITIAL = wp.constant(11)
 STAGE_DI_SHADE = wp.constant(12)
@@ -41,6 +42,7 @@ MAX_NEE_SAMPLES = 256
 # (name, first stage id, number of consecutive ids)
 STAGE_RANGES = (
     ("camera", STAGE_CAMERA, 1),
+    ("lens", STAGE_LENS, 1),
     ("path_trace", STAGE_PATH_TRACE, 1),
     ("di_initial", STAGE_DI_INITIAL, 1),
     ("di_shade", STAGE_DI_SHADE, 1),

@@ -39,6 +39,18 @@ INV_FOUR_PI = wp.constant(0.07957747154594766788)
 LIGHT_ENV = wp.constant(-1)    # a direction toward the environment
 LIGHT_NONE = wp.constant(-2)   # no sample (a reservoir that selected nothing)
 NO_TRIANGLE = wp.constant(-1)  # a ray that hit nothing
+LIGHT_DELTA_BASE = wp.constant(-3)  # delta light i (device/delta_lights.py) is LIGHT_DELTA_BASE - i
+
+# Delta lights (device/delta_lights.py): a point, a spot (a point with a falloff about its axis),
+# and a directional light (parallel light from one direction, as the sun).
+DELTA_POINT = wp.constant(0)
+DELTA_SPOT = wp.constant(1)
+DELTA_DIRECTIONAL = wp.constant(2)
+
+# A spot light's falloff between its inner and outer cone, each as its file format defines it.
+FALLOFF_LINEAR_ANGLE = wp.constant(0)  # Mitsuba 3: linear in the angle from the axis
+FALLOFF_SMOOTHSTEP = wp.constant(1)    # pbrt-v4: smoothstep in the cosine
+FALLOFF_SQUARED_RAMP = wp.constant(2)  # glTF (KHR_lights_punctual): a linear ramp in the cosine, squared
 
 # BSDF lobes (bit flags). A BSDF sample reports the lobe it chose; restricted eval and pdf take a
 # mask of lobes. "Glossy" is a rough microfacet lobe, "delta" an ideal specular one.

@@ -24,7 +24,7 @@ import warp as wp
 
 from ..device.bounce import bounce_dim, material_at, nee_at, scatter_at, shading_frame
 from ..device.bsdf import bsdf_is_delta_only
-from ..device.camera import Camera, camera_u, generate_ray
+from ..device.camera import Camera, camera_u, generate_ray, lens_u
 from ..device.color import max3
 from ..device.intersect import T_MAX, trace_closest
 from ..device.lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
@@ -117,8 +117,9 @@ def make_path_trace_kernel(several_light_samples: bool):
             mat = material_at(scene, hit, frame)
             wi = to_local(frame, -d)
             dim = base + bounce_dim(depth, 0)  # this vertex's numbers (device/bounce.py; RR below)
-            # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B)
-            if params.strategy != STRATEGY_BSDF and bsdf_is_delta_only(mat) == 0:
+            # ---- next-event estimation: N light samples, each weighted 1/N (with MIS: balance over N p_L + p_B;
+            # BSDF-only: the delta lights' samples alone, which no BSDF sample can reach)
+            if bsdf_is_delta_only(mat) == 0 and (params.strategy != STRATEGY_BSDF or scene.num_delta_lights > 0):
                 c = nee_at(scene, hit, mat, frame, wi, key, base, depth, params.nee_samples, params.strategy)
                 nee = c.L
                 rays += c.rays
@@ -183,7 +184,8 @@ def make_path_trace_kernel(several_light_samples: bool):
         for s in range(params.sample_begin, params.sample_end):
             base = wp.uint32(s) * wp.uint32(DIMS_PER_SAMPLE)
             u = camera_u(params.seed, params.frame, pixel, s)
-            ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, u)
+            u_lens = lens_u(params.seed, params.frame, pixel, s)
+            ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, u, u_lens)
             res = path_radiance(scene, params, ray.o, ray.d, wp.uint32(pixel), key, base)
             rays += res.rays
             L = res.L * ray.weight
@@ -191,7 +193,7 @@ def make_path_trace_kernel(several_light_samples: bool):
                 first = emission_sum(res.Le0)
                 if s > params.sample_begin:
                     first = seen(record, res.Le0)
-                extra = lattice_emission(scene, camera, pixel, u, n, first)
+                extra = lattice_emission(scene, camera, pixel, u, u_lens, n, first)
                 record = extra.record
                 L += (res.Le0 * ray.weight + extra.Le) / float(n)
                 rays += n - 1

@@ -7,6 +7,7 @@ import numpy as np
 
 from .. import limits
 from . import shapes as shape_lib
+from .delta_lights import DeltaLightDesc
 from .errors import SceneError, warn
 from .props import Props
 from .textures import FILTERS, WRAPS, TextureDesc, uv_transform
@@ -16,8 +17,8 @@ KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
              "roughplastic", "twosided", "bumpmap", "mask"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
-    "emitter": {"area", "constant", "envmap"},
-    "sensor": {"perspective"},
+    "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
+    "sensor": {"perspective", "thinlens"},
     "film": {"hdrfilm"},
     "rfilter": {"box", "tent", "gaussian"},
     "sampler": {"independent", "stratified", "multijitter", "orthogonal", "ldsampler"},
@@ -25,6 +26,7 @@ KINDS = {
     "texture": {"bitmap", "checkerboard"},
 }
 TYPE_TO_KIND = {t: k for k, ts in KINDS.items() for t in ts}
+DELTA_EMITTERS = ("point", "spot", "directional")  # emitters at a point or from one direction (delta_light)
 
 # Mitsuba's named IORs (src/render/ior.h).
 IOR_TABLE = {
@@ -94,6 +96,8 @@ class CameraDesc:
     filter: str = "gaussian"
     filter_radius: float = 2.0
     filter_stddev: float = 0.5
+    aperture_radius: float = 0.0   # thin lens (Mitsuba 3's `thinlens`); 0: a pinhole
+    focus_distance: float = 1.0e4  # the distance of the plane in focus, along the view axis
 
     def tan_half(self) -> tuple[float, float]:
         aspect = self.width / self.height
@@ -132,6 +136,7 @@ class Scene:
     env_to_world: np.ndarray = field(default_factory=lambda: np.eye(3))
     env_image: np.ndarray | None = None
     textures: list[TextureDesc] = field(default_factory=list)
+    delta_lights: list[DeltaLightDesc] = field(default_factory=list)
 
     @property
     def num_triangles(self) -> int:
@@ -149,6 +154,16 @@ class Scene:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         p = self.positions.reshape(-1, 3)
         return p.min(0), p.max(0)
+
+    def bounding_radius(self) -> float:
+        """The radius of the sphere around the bounding box (a directional light's power)."""
+        lo, hi = self.bounds()
+        return float(0.5 * np.linalg.norm(hi.astype(np.float64) - lo))
+
+    def delta_light_power(self) -> np.ndarray:
+        """Per delta light, its power in light_power's units (scene/delta_lights.py)."""
+        r = self.bounding_radius()
+        return np.array([d.power(r) for d in self.delta_lights], np.float64)
 
 
 # ----------------------------------------------------------------------------- builder
@@ -176,6 +191,7 @@ class _Builder:
         self.spp = 16
         self.max_depth = -1
         self.rr_depth = 5
+        self.delta_lights: list[DeltaLightDesc] = []
         self.hide_emitters = False
 
     def props(self, obj: dict, kind: str) -> Props:
@@ -205,6 +221,8 @@ class _Builder:
             kind = self.kind_of(obj)
             if kind == "shape":
                 self.shape(obj)
+            elif kind == "emitter" and obj.get("type") in DELTA_EMITTERS:
+                self.delta_lights.append(self.delta_light(obj))
             elif kind == "emitter":
                 self.environment(obj)
             elif kind == "sensor":
@@ -233,7 +251,7 @@ class _Builder:
         env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
         return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
                      self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
-                     env_kind, env_rad, env_rot, env_img, self.textures)
+                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights)
 
     def integrator(self, obj):
         p = self.props(obj, "integrator")
@@ -260,9 +278,19 @@ class _Builder:
         fov_axis = p.string("fov_axis", "x")
         if fov_axis not in ("x", "y", "smaller", "larger", "diagonal"):
             raise SceneError(f"unknown fov_axis '{fov_axis}'", p.loc)
-        for k in ("near_clip", "far_clip", "focus_distance"):
-            if p.has(k):
-                p.float(k)
+        if p.has("near_clip"):
+            p.float("near_clip")
+        far_clip = p.float("far_clip", 1.0e4)
+        aperture, focus = 0.0, far_clip  # Mitsuba 3's focus_distance defaults to far_clip
+        if p.type == "thinlens":
+            aperture = p.float("aperture_radius")  # required, as in Mitsuba 3
+            if aperture < 0:
+                raise SceneError("aperture_radius must be non-negative", p._loc_of("aperture_radius"))
+            focus = p.float("focus_distance", far_clip)
+            if focus <= 0:
+                raise SceneError("focus_distance must be positive", p._loc_of("focus_distance"))
+        elif p.has("focus_distance"):
+            p.float("focus_distance")  # a pinhole's focus distance changes nothing
         width, height, filt = 768, 576, ("gaussian", 2.0, 0.5)
         for child in p.children():
             kind = self.kind_of(child)
@@ -287,7 +315,8 @@ class _Builder:
         # Mitsuba's camera frame must not scale; strip any scale of the rotation part.
         m = to_world.copy()
         m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0, keepdims=True)
-        self.camera = CameraDesc(m, fov, fov_axis, width, height, *filt)
+        self.camera = CameraDesc(m, fov, fov_axis, width, height, *filt, aperture_radius=aperture,
+                                 focus_distance=focus)
         p.warn_unqueried()
 
     def film(self, obj):
@@ -658,6 +687,43 @@ class _Builder:
         else:  # legal (Mitsuba renders it as nothing) but surely not what was meant
             what = "an emitter" if np.any(emission > 0) else "a shape"
             warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)
+
+    def delta_light(self, obj) -> DeltaLightDesc:
+        """Mitsuba 3's point, spot and directional emitters."""
+        p = self.props(obj, "emitter")
+        t = p.type
+        name = "irradiance" if t == "directional" else "intensity"
+        value = p.rgb(name, np.ones(3))
+        if np.any(value < 0):
+            raise SceneError(f"{name} must be non-negative", p._loc_of(name))
+        where = "direction" if t == "directional" else "position"
+        if t != "spot" and p.has(where) and p.has("to_world"):
+            raise SceneError(f"give a {t} emitter '{where}' or 'to_world', not both", p.loc)
+        m = p.transform("to_world")
+        if t == "point":
+            pos = p.vec3("position") if p.has("position") else m[:3, 3]
+            light = DeltaLightDesc("point", value, position=np.asarray(pos, float))
+        elif t == "directional":
+            axis = p.vec3("direction") if p.has("direction") else m[:3, :3] @ np.array([0.0, 0.0, 1.0])
+            if np.linalg.norm(axis) <= 0:
+                raise SceneError("the directional emitter's direction is zero", p.loc)
+            light = DeltaLightDesc("directional", value, axis=axis / np.linalg.norm(axis))
+        else:
+            if p.has("texture"):
+                raise SceneError("a spot emitter's 'texture' (a projected image) is not supported", p._loc_of("texture"))
+            axis = m[:3, :3] @ np.array([0.0, 0.0, 1.0])
+            if np.linalg.norm(axis) <= 0:
+                raise SceneError("the spot emitter's to_world maps its axis to zero", p.loc)
+            cutoff = p.float("cutoff_angle", 20.0)
+            beam = p.float("beam_width", cutoff * 0.75)
+            if not 0 < cutoff <= 180:
+                raise SceneError("cutoff_angle must be in (0, 180] degrees", p._loc_of("cutoff_angle"))
+            if not 0 <= beam <= cutoff:
+                raise SceneError("beam_width must be in [0, cutoff_angle] degrees", p._loc_of("beam_width"))
+            light = DeltaLightDesc("spot", value, position=m[:3, 3].astype(float), axis=axis / np.linalg.norm(axis),
+                                   falloff="linear_angle", inner=math.radians(beam), outer=math.radians(cutoff))
+        p.warn_unqueried()
+        return light
 
     def environment(self, obj):
         p = self.props(obj, "emitter")

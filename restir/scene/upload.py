@@ -5,10 +5,13 @@ import warp as wp
 from ..device.bsdf import Material
 from ..device.bump import Bump
 from ..device.camera import Camera
+from ..device.delta_lights import DeltaLight
 from ..device.scene_device import SceneDevice
 from ..device.textures import (TEX_BITMAP, TEX_CHECKERBOARD, TEX_FILTER_BILINEAR, TEX_FILTER_NEAREST, TEX_WRAP_CLAMP,
                                TEX_WRAP_MIRROR, TEX_WRAP_REPEAT, Texture)
-from ..device.types import (ENV_CONSTANT, ENV_MAP, ENV_NONE, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT,
+from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONSTANT, ENV_MAP, ENV_NONE,
+                            FALLOFF_LINEAR_ANGLE, FALLOFF_SMOOTHSTEP, FALLOFF_SQUARED_RAMP, FILTER_BOX, FILTER_GAUSSIAN,
+                            FILTER_TENT, LIGHT_DELTA_BASE,
                             MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
@@ -45,6 +48,20 @@ def material_struct(m, device="cpu") -> Material:
     s.opacity = float(m.opacity)
     table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
     s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
+    return s
+
+
+def delta_light_struct(d) -> DeltaLight:
+    """A delta light (scene.delta_lights.DeltaLightDesc) as the device reads it."""
+    s = DeltaLight()
+    s.kind = int({"point": DELTA_POINT, "spot": DELTA_SPOT, "directional": DELTA_DIRECTIONAL}[d.kind])
+    s.p = wp.vec3(*np.asarray(d.position, np.float32))
+    s.axis = wp.vec3(*np.asarray(d.axis, np.float32))
+    s.I = wp.vec3(*np.asarray(d.intensity, np.float32))
+    s.falloff = int({"linear_angle": FALLOFF_LINEAR_ANGLE, "smoothstep": FALLOFF_SMOOTHSTEP,
+                     "squared_ramp": FALLOFF_SQUARED_RAMP}[d.falloff])
+    s.inner, s.outer = float(d.inner), float(d.outer)
+    s.cos_inner, s.cos_outer = float(np.cos(d.inner)), float(np.cos(d.outer))
     return s
 
 
@@ -114,19 +131,28 @@ class DeviceScene:
                                         wp.vec4i)
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
 
+        # one alias table over the emissive triangles, then the delta lights, by power
         power = sc.light_power()
         lights = np.nonzero(power > 0)[0].astype(np.int32)
+        delta_power = sc.delta_light_power()
+        deltas = np.nonzero(delta_power > 0)[0].astype(np.int32)
         tri_pdf = np.zeros(sc.num_triangles, np.float32)
-        if len(lights):
-            prob, alias, pmf = alias_table(power[lights])
-            tri_pdf[lights] = pmf / sc.triangle_areas()[lights]
+        delta_pmf = np.zeros(max(len(sc.delta_lights), 1), np.float32)
+        entries = np.concatenate([lights, LIGHT_DELTA_BASE - deltas]).astype(np.int32)
+        if len(entries):
+            prob, alias, pmf = alias_table(np.concatenate([power[lights], delta_power[deltas]]))
+            tri_pdf[lights] = pmf[:len(lights)] / sc.triangle_areas()[lights]
+            delta_pmf[deltas] = pmf[len(lights):]
         else:
             prob, alias = np.ones(1, np.float32), np.zeros(1, np.int32)
-        s.light_tri = self._arr(lights if len(lights) else np.zeros(1, np.int32), wp.int32)
+        s.light_tri = self._arr(entries if len(entries) else np.zeros(1, np.int32), wp.int32)
         s.light_prob = self._arr(prob, float)
         s.light_alias = self._arr(alias, wp.int32)
         s.num_tri_lights = int(len(lights))
         s.tri_light_pdf = self._arr(tri_pdf, float)
+        s.delta_lights = self._arr([delta_light_struct(d) for d in sc.delta_lights] or [DeltaLight()], DeltaLight)
+        s.delta_light_pmf = self._arr(delta_pmf, float)
+        s.num_delta_lights = int(len(deltas))
 
         s.env_kind = int({"none": ENV_NONE, "constant": ENV_CONSTANT, "envmap": ENV_MAP}[sc.env_kind])
         s.env_radiance = wp.vec3(*sc.env_radiance)
@@ -147,7 +173,7 @@ class DeviceScene:
             s.env_marginal_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
             s.env_conditional_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
         has_env = sc.env_kind != "none"
-        s.env_select_prob = float(1.0 if has_env and not len(lights) else (0.5 if has_env else 0.0))
+        s.env_select_prob = float(1.0 if has_env and not len(entries) else (0.5 if has_env else 0.0))
 
         s.textures, s.tex_pixels = self._textures(sc.textures)
         return s
@@ -196,6 +222,8 @@ class DeviceScene:
         c.filter_bins = n
         c.filter_inv_integral = float(1.0 / bins.sum())
         c.jitter = int(self.jitter)
+        c.aperture_radius = float(cd.aperture_radius)
+        c.focus_distance = float(cd.focus_distance)
         return c
 
     def camera_at(self, to_world: np.ndarray) -> Camera:
@@ -203,7 +231,8 @@ class DeviceScene:
         c = Camera()
         base = self.camera
         for name in ("tan_half_x", "tan_half_y", "width", "height", "filter", "filter_radius", "filter_cdf",
-                     "filter_bins", "filter_stddev", "filter_inv_integral", "jitter"):
+                     "filter_bins", "filter_stddev", "filter_inv_integral", "jitter", "aperture_radius",
+                     "focus_distance"):
             setattr(c, name, getattr(base, name))
         c.to_world = wp.mat44(*np.asarray(to_world, np.float32).reshape(-1))
         c.to_local = wp.mat44(*np.linalg.inv(to_world).astype(np.float32).reshape(-1))

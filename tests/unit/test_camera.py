@@ -81,7 +81,7 @@ def _emission_by_quadrature(scene, points: int = 46368) -> np.ndarray:
         acc = wp.vec3(0.0)
         for a in range(n):
             u = wp.vec2((float(a) + 0.5) / float(n), (float((a * generator) % n) + 0.5) / float(n))
-            r = generate_ray(cam, pixel % cam.width, pixel // cam.width, u)
+            r = generate_ray(cam, pixel % cam.width, pixel // cam.width, u, wp.vec2(0.5))
             acc += emission_seen(scene, trace_closest(scene, r.o, r.d, T_MAX), r.d) * r.weight
         out[pixel] = acc / float(n)
 

@@ -18,7 +18,7 @@ from restir.scene.upload import DeviceScene
 def reproject_kernel(cam: Camera, prev: Camera, depth: float, u: wp.vec2, out: wp.array(dtype=wp.int32)):
     pixel = wp.tid()
     # a point seen through the pixel at the filter offset drawn from u
-    ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, u)
+    ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, u, wp.vec2(0.5))
     out[pixel] = reproject(cam, prev, pixel, ray.o + ray.d * depth)
 
 

@@ -5,10 +5,10 @@ reuse keep two, the current and the previous frame's, as a `PingPong` pair whose
 one visible place where this frame's data becomes history.
 
 A hit is its triangle and barycentrics (12 B). The ray that found it (its distance and direction,
-16 B more) is stored only where its origin is a vertex of the path (Suffix ReSTIR's prefix ends);
-every primary ray of a frame starts at the pinhole camera's position, so a primary-hit G-buffer
-keeps that position once and rebuilds the ray from it and the hit: the same numbers to float
-rounding, 32 B a pixel less for a method with two G-buffers.
+16 B more) is stored only where its origin is a vertex of the path (Suffix ReSTIR's prefix ends)
+or a point on a thin lens; every primary ray of a pinhole camera starts at its position, so a
+primary-hit G-buffer keeps that position once and rebuilds the ray from it and the hit: the same
+numbers to float rounding, 32 B a pixel less for a method with two G-buffers.
 """
 import numpy as np
 import warp as wp
@@ -35,6 +35,12 @@ def allocate_gbuffer(integrator, name: str, store_rays: bool = False) -> GBuffer
         gb.t = integrator.buffer(f"{name}.t", float)
         gb.dir = integrator.buffer(f"{name}.dir", wp.vec3)
     return gb
+
+
+def allocate_primary_gbuffer(integrator, name: str) -> GBuffer:
+    """A G-buffer of primary hits: the rays are rebuilt from the camera's position, or stored
+    where a thin lens starts each at a point of its own."""
+    return allocate_gbuffer(integrator, name, store_rays=integrator.dscene.camera.aperture_radius > 0.0)
 
 
 def set_camera_origin(gb: GBuffer, camera) -> None:

@@ -20,7 +20,7 @@ import functools
 
 import warp as wp
 
-from ...device.camera import Camera, camera_u, generate_ray, lattice_u
+from ...device.camera import Camera, camera_u, generate_ray, lattice_u, lens_u
 from ...device.intersect import T_MAX, SurfaceHit, trace_closest
 from ...device.lights import env_eval, triangle_emission
 from ...device.scene_device import SceneDevice
@@ -49,14 +49,16 @@ class LatticeEmission:
 
 
 @wp.func
-def lattice_emission(scene: SceneDevice, camera: Camera, pixel: int, u: wp.vec2, n: int,
+def lattice_emission(scene: SceneDevice, camera: Camera, pixel: int, u: wp.vec2, u_lens: wp.vec2, n: int,
                      first: float) -> LatticeEmission:
-    """Rays 1..n-1 of `emission.rays` (ray 0 is the sample's own, at u, whose record is `first`)."""
+    """Rays 1..n-1 of `emission.rays` (ray 0 is the sample's own, at u, whose record is `first`).
+    A thin lens's rays share the sample's aperture point u_lens: each ray's image position is
+    still uniform, and so each ray's emission an unbiased estimate."""
     out = LatticeEmission()
     out.Le = wp.vec3(0.0)
     out.record = first
     for j in range(1, n):
-        ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, lattice_u(u, j, n))
+        ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, lattice_u(u, j, n), u_lens)
         Le = emission_seen(scene, trace_closest(scene, ray.o, ray.d, T_MAX), ray.d)
         out.Le += Le * ray.weight
         out.record = seen(out.record, Le)
@@ -86,10 +88,14 @@ def make_primary_hits_kernel(mutation: str = "none"):
                             events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
         u = camera_u(seed, frame, pixel, sample)
-        ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, u)
+        u_lens = lens_u(seed, frame, pixel, sample)
+        ray = generate_ray(camera, pixel % camera.width, pixel // camera.width, u, u_lens)
         hit = trace_closest(scene, ray.o, ray.d, T_MAX)
         gb.tri[pixel] = hit.tri
         gb.bary[pixel] = hit.bary
+        if gb.from_camera == 0:  # rays from a thin lens start at different points: kept (gbuffer.py)
+            gb.t[pixel] = hit.t
+            gb.dir[pixel] = ray.d
         weight[pixel] = ray.weight
         Le = wp.vec3(0.0)
         rays = int(1)
@@ -105,7 +111,7 @@ def make_primary_hits_kernel(mutation: str = "none"):
                 shift = u
                 if wp.static(fixed_lattice):
                     shift = wp.vec2(0.0)
-                extra = lattice_emission(scene, camera, pixel, shift, n, record)
+                extra = lattice_emission(scene, camera, pixel, shift, u_lens, n, record)
                 Le = (Le + extra.Le) / float(n)
                 record = extra.record
                 rays = n

@@ -34,7 +34,8 @@ from ...device.types import STRATEGY_MIS
 from ...resampling.ris import RisState, ris_stream
 from ..common.shading import Shading
 from .params import PathReuseParams
-from .path_sample import (MAX_PATH_LENGTH, NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags)
+from .path_sample import (MAX_PATH_LENGTH, NO_RC, RC_EMITTER, RC_ENV, RC_SURFACE, PathReservoir, pack_flags,
+                          with_delta_light)
 from .rc_criteria import lobe_pdf, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex, qualifies_scatter_vertex
 
 EVENTS_PER_PATH = 2 * (MAX_PATH_LENGTH + 2)  # event indices of candidate c: c * EVENTS_PER_PATH + ...
@@ -117,6 +118,7 @@ def trace_base_path(scene: SceneDevice, params: PathReuseParams, x0: Shading, se
                 else:
                     out.r = event_record(F, pack_flags(k, NO_RC, 0, 0, 1, RC_SURFACE), seed, -1, wp.vec2(0.0),
                                          wp.vec3(0.0), wp.vec3(0.0), wp.vec2(0.0), c.p_light)
+                out.r.flags = with_delta_light(out.r.flags, c.is_delta)
         # ---- BSDF sampling at x_k
         sc = scatter_at(hit, mat, frame, wi, seed, wp.uint32(0), k)
         if sc.valid == 0:

@@ -11,7 +11,7 @@ from ...settings import Settings, setting
 from ..base import Integrator
 from ..common.primary_hits import MUTATIONS as PRIMARY_HIT_MUTATIONS, mutant_kernel, trace_primary_hits
 from ..common.events import PassCounts
-from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.gbuffer import PingPong, allocate_primary_gbuffer
 from .direct_light import attach_direct_light, check_di_settings
 from .params import SHIFTS, PathReuseParams
 
@@ -88,7 +88,8 @@ class PathReuseIntegrator(Integrator):
             s.max_depth = PT_UNBOUNDED_DEPTH
             self.notes.append(f"{self.name} renders unbounded depth as max_depth {PT_UNBOUNDED_DEPTH}")
         self.spatial_radius = getattr(s, self.SPATIAL).resolve_radius(self.height)
-        self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
+        self.gbuffers = PingPong(allocate_primary_gbuffer(self, "gbuffer"),
+                                 allocate_primary_gbuffer(self, "gbuffer_prev"))
         self.primary_weight = self.buffer("primary_weight", float)
         self.emission = self.buffer("emission", wp.vec3)
         self.reservoirs = PingPong(self.buffer(f"{self.RESERVOIRS}", PathReservoir),

@@ -14,7 +14,7 @@ path shares, with what the path does after it, and the source-side terms of the 
 |-----------|-------|---------|
 | F         | 12    | integrand of the selected path in the domain that stores it |
 | W, M      | 4 + 4 | unbiased contribution weight, confidence |
-| flags     | 4     | path length, rc length, lobes at rcPrev and at z, end type, rc kind |
+| flags     | 4     | path length, rc length, lobes at rcPrev and at z, end type, rc kind, delta light |
 | seed      | 4     | the base path's random-number key (replay) |
 | rc_tri    | 4     | z's triangle (a surface or an emissive triangle); -1 for an environment rc |
 | rc_bary   | 8     | z's barycentrics (full floats: z is rebuilt exactly) |
@@ -25,7 +25,8 @@ path shares, with what the path does after it, and the source-side terms of the 
 
 Total 76 bytes (the official implementation's is 88; docs/theory/restir_pt.md#what-a-path-sample-stores).
 `rc_L` by case: NEE at z: Le of the
-light (its MIS weight is recomputed after a shift, so it is not in rc_L); emission found from z:
+light (its MIS weight is recomputed after a shift, so it is not in rc_L; a delta light's is 1, and
+the flags say which it is); emission found from z:
 Le; a path continuing past z: the product of what follows z's own scatter (MIS weight
 included); z the emitter itself (an "escape" rc vertex): unused (Le is re-read from the
 triangle). `light_pdf`: the solid-angle light pdf at z when the end's MIS is taken at z (z does
@@ -39,7 +40,8 @@ from ...resampling.ris import ReservoirWeights
 
 # flags: bits 0-7 path length, 8-15 rc length (NO_RC: none), 16-18 lobe at rcPrev, 19-21 lobe at z
 # (lobe codes: 0 none or all lobes, else 1 + the LOBE_* bit), bit 22 NEE end, bits 23-24 rc kind,
-# bits 25-26 origin (which input of the last reuse passes the sample came from; for the stats)
+# bits 25-26 origin (which input of the last reuse passes the sample came from; for the stats),
+# bit 27 the NEE end's light is a delta light
 NO_RC = wp.constant(255)
 PATH_NONE = wp.constant(-1)      # flags of a reservoir that holds no path
 RC_SURFACE = wp.constant(0)      # z is a scattering vertex
@@ -124,6 +126,18 @@ def with_lobe_at_rc_prev(flags: int, lobe: int) -> int:
 @wp.func
 def ends_with_nee(flags: int) -> int:
     return (flags >> 22) & 1
+
+
+@wp.func
+def ends_on_delta_light(flags: int) -> int:
+    """The path's NEE end connects to a delta light (no BSDF technique: MIS weight 1)."""
+    return (flags >> 27) & 1
+
+
+@wp.func
+def with_delta_light(flags: int, delta: int) -> int:
+    """flags with the NEE end's light kind set (delta: 1 for a delta light)."""
+    return (flags & ~(1 << 27)) | (delta << 27)
 
 
 @wp.func

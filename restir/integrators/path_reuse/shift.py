@@ -47,8 +47,8 @@ from ...resampling.ris import is_finite
 from ..common.shading import Shading
 from .domain import Domain
 from .params import SHIFT_HYBRID, PathReuseParams
-from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, PathReservoir, ends_with_nee, holds_path, lobe_at_rc,
-                          lobe_at_rc_prev, path_length, rc_kind, rc_length)
+from .path_sample import (NO_RC, RC_EMITTER, RC_ENV, PathReservoir, ends_on_delta_light, ends_with_nee, holds_path,
+                          lobe_at_rc, lobe_at_rc_prev, path_length, rc_kind, rc_length)
 from .rc_criteria import (eval_lobe, lobe_weight, qualifies_escape_vertex, qualifies_nee_vertex,
                           qualifies_scatter_vertex)
 
@@ -258,8 +258,13 @@ def make_shift(mutation: str = "none", inline: bool = False):
                 wo_z = to_local(frame_z, r.rc_wi)
                 if ends_with_nee(flags) != 0 and path_length(flags) == rcl:
                     # NEE at z: all lobes, and the MIS weight against BSDF sampling at z's new wi
+                    # (none for a delta light, which BSDF sampling cannot reach: weight 1). The light
+                    # sample itself does not move (z does not), so J has no factor at the light.
                     f_z = bsdf_eval(mat_z, wi_z, wo_z)
-                    F = wp.cw_mul(w_y, wp.cw_mul(f_z, r.rc_L)) / (r.light_pdf + bsdf_pdf(mat_z, wi_z, wo_z))
+                    p_sum = r.light_pdf
+                    if ends_on_delta_light(flags) == 0:
+                        p_sum += bsdf_pdf(mat_z, wi_z, wo_z)
+                    F = wp.cw_mul(w_y, wp.cw_mul(f_z, r.rc_L)) / p_sum
                     jac = wp.vec2(G * e.p, 1.0)
                 else:
                     ez = eval_lobe(mat_z, wi_z, wo_z, lobe_at_rc(flags))

@@ -30,7 +30,7 @@ from ...device.scene_device import SceneDevice
 from ...device.types import STRATEGY_MIS
 from .params import PathReuseParams
 from .path_sample import (NO_RC, RC_SURFACE, PathReservoir, ends_with_nee, holds_path, lobe_at_rc_prev, path_length,
-                          rc_kind, rc_length, with_lobe_at_rc, with_lobe_at_rc_prev)
+                          rc_kind, rc_length, with_delta_light, with_lobe_at_rc, with_lobe_at_rc_prev)
 from .rc_criteria import lobe_pdf, lobe_weight, qualifies_nee_vertex, qualifies_scatter_vertex
 from .shift import Replay
 
@@ -103,6 +103,7 @@ def propose_suffix(scene: SceneDevice, params: PathReuseParams, r: PathReservoir
         out.r.rc_wi = c.wi
         out.r.rc_L = c.Le
         out.r.light_pdf = c.p_light
+        out.r.flags = with_delta_light(out.r.flags, c.is_delta)  # the fresh sample's light may be another kind
         out.valid = wp.where(max3(c.L) > 0.0, 1, 0)
         return out
     # ---- z's own scatter: its lobe must still make z the rc vertex
@@ -145,6 +146,7 @@ def propose_suffix(scene: SceneDevice, params: PathReuseParams, r: PathReservoir
             out.rays += c.rays
             out.r.rc_L = wp.cw_mul(beta, c.L)
             out.r.light_pdf = c.p_light
+            out.r.flags = with_delta_light(out.r.flags, c.is_delta)
             out.valid = wp.where(max3(c.L) > 0.0, 1, 0)
             return out
         sc = scatter_at(hit, mat, frame, wi, key, wp.uint32(0), k)

@@ -10,7 +10,7 @@ import warp as wp
 from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS
 from ...settings import MUTATION_DOC, Settings, setting
 from ..base import Integrator
-from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.gbuffer import PingPong, allocate_primary_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel, trace_primary_hits
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -110,7 +110,8 @@ class ReSTIRDI(Integrator):
         self.spatial_radius = self.settings.spatial.resolve_radius(self.height)
         if self.primary is None:
             # this sample's primary hits and the previous sample's (the temporal technique's domain)
-            self.gbuffers = PingPong(allocate_gbuffer(self, "gbuffer"), allocate_gbuffer(self, "gbuffer_prev"))
+            self.gbuffers = PingPong(allocate_primary_gbuffer(self, "gbuffer"),
+                                     allocate_primary_gbuffer(self, "gbuffer_prev"))
             self.primary_weight = self.buffer("primary_weight", float)
             self.emission = self.buffer("emission", wp.vec3)
         else:  # a component of another method, which owns the primary-hit layer

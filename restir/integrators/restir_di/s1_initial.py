@@ -2,7 +2,7 @@
 (Bitterli 2020, Alg. 3; the two generators combined as in Talbot 2005's multiple-distribution RIS).
 
 Light candidates come from the NEE light sampler (power-proportional triangles uniform by area,
-or the environment); BSDF candidates trace the smooth lobes' sample and keep the emitter it hits
+delta lights, or the environment); BSDF candidates trace the smooth lobes' sample and keep the emitter it hits
 (or the environment it escapes to). Every candidate y is a light point in its own measure and
 is weighted by the balance heuristic over both generators:
 
@@ -45,6 +45,8 @@ def light_candidate(scene: SceneDevice, sh: Shading, u_sel: float, u: wp.vec2) -
         if ls.is_env != 0:
             cand.light_tri = LIGHT_ENV
             cand.light_y = ls.wi
+        elif ls.is_delta != 0:
+            cand.light_tri = ls.tri  # the delta light's identity: nothing else to keep
         else:
             cand = on_triangle(ls.tri, ls.bary)
     return cand
