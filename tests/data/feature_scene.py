@@ -18,7 +18,12 @@
   room's plant), a constant opacity under the light (the kitchen's blinds: light reaches the floor
   below through it only by BSDF sampling, since a shadow ray stops at a mask in both renderers),
   a masked rug with a bump map over a floor of another colour, and masks around a rough and a
-  smooth conductor (a delta lobe); the camera sees through the leaf (stochastic primary hits).
+  smooth conductor (a delta lobe); the camera sees through the leaf (stochastic primary hits);
+- `write_delta_scene`: Mitsuba 3's delta lights, a point, a spot (its linear falloff between
+  beam_width and cutoff_angle) and a directional light, alone or mixed with an area light and a
+  constant environment, over a diffuse floor, a rough conductor wall and a rough plastic sphere
+  (whose shadows and glossy highlights show where each light is); `write_thinlens_scene`: the
+  same room lit by its area light and the point light, seen through Mitsuba 3's thin lens.
 
 Both the Mitsuba reference generator and the test call them, so they render identical inputs.
 `SCENES` names them.
@@ -28,15 +33,17 @@ import os
 import numpy as np
 
 
-def _header(fov: str, origin: str, target: str) -> str:
-    """The scene element's opening, defaults, integrator and sensor (48 x 36, box filter)."""
+def _header(fov: str, origin: str, target: str, lens: str = "") -> str:
+    """The scene element's opening, defaults, integrator and sensor (48 x 36, box filter); lens:
+    a thin lens's parameters (a perspective sensor without)."""
+    sensor = f'thinlens">{lens}' if lens else 'perspective">'
     return f"""<scene version="3.0.0">
     <default name="spp" value="16"/>
     <default name="resx" value="48"/>
     <default name="resy" value="36"/>
     <default name="max_depth" value="5"/>
     <integrator type="path"><integer name="max_depth" value="$max_depth"/></integrator>
-    <sensor type="perspective">
+    <sensor type="{sensor}
         <float name="fov" value="{fov}"/>
         <string name="fov_axis" value="y"/>
         <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
@@ -335,5 +342,55 @@ def write_mask_scene(directory: str) -> str:
     return path
 
 
+DELTA_ROOM = """    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><translate z="2"/></transform>
+        <bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.6, 0.5, 0.3"/><float name="radius" value="0.5"/>
+        <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.8"/></bsdf>
+    </shape>
+"""
+DELTA_LIGHTS = {
+    "area": """    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.2"/><rotate x="1" angle="90"/><translate x="1" y="2"/></transform>
+        <emitter type="area"><rgb name="radiance" value="5, 5, 5"/></emitter>
+    </shape>
+""",
+    "env": """    <emitter type="constant"><rgb name="radiance" value="0.05, 0.06, 0.08"/></emitter>
+""",
+    "point": """    <emitter type="point"><point name="position" value="0.8, 1.2, -0.5"/><rgb name="intensity" value="2, 1.5, 1"/></emitter>
+""",
+    "spot": """    <emitter type="spot">
+        <transform name="to_world"><lookat origin="-1, 2.2, -1" target="-0.5, 0, 0.5" up="0, 1, 0"/></transform>
+        <rgb name="intensity" value="6, 6, 8"/><float name="cutoff_angle" value="25"/><float name="beam_width" value="12"/>
+    </emitter>
+""",
+    "directional": """    <emitter type="directional"><vector name="direction" value="1, -2, 1.5"/><rgb name="irradiance" value="0.8, 0.7, 0.5"/></emitter>
+""",
+}
+
+
+def write_delta_scene(directory: str, lights=("point", "spot", "directional", "area", "env"), lens: str = "") -> str:
+    os.makedirs(directory, exist_ok=True)
+    path = os.path.join(directory, "scene.xml")
+    with open(path, "w") as f:
+        f.write(_header("50", "0, 1.5, -4", "0, 0.5, 0", lens) + DELTA_ROOM + "".join(DELTA_LIGHTS[k] for k in lights)
+                + "</scene>\n")
+    return path
+
+
+def write_thinlens_scene(directory: str) -> str:
+    lens = '<float name="aperture_radius" value="0.15"/><float name="focus_distance" value="3.5"/>'
+    return write_delta_scene(directory, ("point", "area"), lens)
+
+
 SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bumps": write_bump_scene,
-          "masks": write_mask_scene}
+          "masks": write_mask_scene, "delta-lights": write_delta_scene, "thinlens": write_thinlens_scene,
+          # the delta lights alone: points and spots (no other light), and the sun
+          "delta-only": lambda d: write_delta_scene(d, ("point", "spot")),
+          "sun": lambda d: write_delta_scene(d, ("directional",))}

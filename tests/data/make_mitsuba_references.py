@@ -31,6 +31,8 @@ REFERENCES = {
     "textures": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: checkerboard, filter / wrap modes, to_uv
     "bumps": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: bumpmap around six BSDFs, scale, to_uv, switches
     "masks": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: mask by texture (luminance) and constant, around bumpmap, conductors
+    "delta-lights": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: point, spot, directional, area light, constant env
+    "thinlens": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: the same room through a thin lens
     "veach-ajar": (64, 36, 13, 4096, 16),
     "staircase2": (64, 36, 65, 4096, 16),  # Mitsuba 0.5 as distributed; its own max_depth
 }

@@ -4,7 +4,9 @@ the generated scenes of tests/data/feature_scene.py (features: envmap, bitmap te
 rough dielectric, GGX, disk light; textures: checkerboard, filter and wrap modes, to_uv, textures
 on every texturable parameter; bumps: bump maps around five BSDFs, a mesh without uvs, and
 Bitterli's unreferenced wrapper, which neither renderer applies; masks: opacity masks by texture
-and constant, around a bump map and two conductors, seen through by the camera).
+and constant, around a bump map and two conductors, seen through by the camera; delta-lights:
+Mitsuba 3's point, spot and directional emitters mixed with an area light and a constant
+environment; thinlens: a thin-lens sensor).
 
 References: tests/data/mitsuba/NAME.{mean,var}.exr, made by tests/data/make_mitsuba_references.py
 (its settings and command are in NAME.json). Ours: FRAMES frames as batch means; Welch z with
@@ -30,9 +32,9 @@ from tests.shared_scenes import scene_path
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 FRAMES = 32
 SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256, "bumps": 256, "masks": 256,
-       "veach-ajar": 256, "staircase2": 256}
+       "delta-lights": 256, "thinlens": 256, "veach-ajar": 256, "staircase2": 256}
 MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01, "bumps": 0.01, "masks": 0.01,
-             "veach-ajar": 0.02, "staircase2": 0.02}
+             "delta-lights": 0.01, "thinlens": 0.01, "veach-ajar": 0.02, "staircase2": 0.02}
 # Tungsten's render of the same scene (as distributed with it): a cross-renderer check of the mean
 # only (its pixels are not resolved well enough, and the two renderers' colour handling differs a
 # little: Mitsuba 3's 64x36 reference is 0.5/1.2/1.5% above it in R/G/B)
@@ -41,7 +43,7 @@ TUNGSTEN_TOL = 0.02
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures", "bumps", "masks",
-                                  "veach-ajar", "staircase2"])
+                                  "delta-lights", "thinlens", "veach-ajar", "staircase2"])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
     if not meta_path.exists():
