@@ -14,7 +14,7 @@ import numpy as np
 import restir
 from restir.scene.builtin import sphere_cap_radiance
 from restir.validation import IndependentRuns, assert_matches
-from tests.scenes import bump_scene, mask_scene
+from tests.scenes import bump_scene, feature_scene_named, mask_scene
 from tests.shared_scenes import scene_path
 
 
@@ -166,11 +166,18 @@ MATRIX_SCENES = {
     "sphere-cap": (lambda: restir.load_scene("builtin:sphere-cap", albedo=0.5, radiance=1.0, phi=0.05), 5, 0.01, 64, 8),
     "bumps": (bump_scene, 5, 0.06, 64, 8),
     "masks": (mask_scene, 5, 0.06, 64, 8),
+    # tests/data/feature_scene.py: delta lights mixed with an area light and an environment, delta
+    # lights alone (points and spots; the sun), and a thin lens
+    **{name: (functools.partial(feature_scene_named, name), 5, 0.06, 64, 8)
+       for name in ("delta-lights", "delta-only", "sun", "thinlens")},
 }
 # Scenes that get some of each matrix's configurations, named in the matrix files (the bump maps:
-# the cells whose shifts cross a tilted, wi-dependent shading frame); the rest get every one.
+# the cells whose shifts cross a tilted, wi-dependent shading frame; the lights and lens scenes:
+# the cells of every stage and shift, with paths that end on delta lights or start on a lens); the
+# rest get every one.
 PARTIAL_MATRIX_SCENES = ("bumps", "masks")
-FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES if n not in PARTIAL_MATRIX_SCENES]
+LIGHT_MATRIX_SCENES = ("delta-lights", "delta-only", "sun", "thinlens")
+FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES if n not in PARTIAL_MATRIX_SCENES + LIGHT_MATRIX_SCENES]
 # The path tracer's spp per frame in the references: 16, and 48 on veach-mis, whose MDB the
 # 16-spp reference set (5.8% on every configuration whatever the method's variance).
 MATRIX_REFERENCE_SPP = {"veach-mis": 48}

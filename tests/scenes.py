@@ -97,6 +97,16 @@ def bump_scene():
         return restir.load_scene(write_bump_scene(tempfile.mkdtemp()))
 
 
+def feature_scene_named(name: str):
+    """One of tests/data/feature_scene.py's SCENES, loaded from a fresh temporary folder."""
+    import tempfile
+
+    import restir
+    from tests.data.feature_scene import SCENES
+
+    return restir.load_scene(SCENES[name](tempfile.mkdtemp()))
+
+
 def write_scene(tmp_path, bsdf_xml: str, image: np.ndarray | None = None, mode: str = "RGB", before: str = "") -> str:
     """A scene with one rectangle (z = 0, facing +z, uv (0, 0) at (-1, -1)) carrying bsdf_xml,
     after the top-level objects `before`."""

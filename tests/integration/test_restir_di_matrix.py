@@ -12,8 +12,10 @@ per channel at image, tile (8x8) and pixel level, alpha = 1e-3 per configuration
 Scenes: the feature scene (environment map, textures, glossy and rough-glass materials), the
 half-dark scene (about half of all light candidates are zero: C6, the target of defects A1 and
 A3), the shadow scene (a large light behind blinds: visibility differs from pixel to pixel) and
-the glossy Cornell box (GGX and Beckmann surfaces under a small light); and the bump-map scene
-(tests/data/feature_scene.py) with the cells of BUMP_CELLS.
+the glossy Cornell box (GGX and Beckmann surfaces under a small light); the bump-map scene
+(tests/data/feature_scene.py) with the cells of BUMP_CELLS; and the delta-light and thin-lens
+scenes (tests/helpers.py LIGHT_MATRIX_SCENES: samples on point, spot and directional lights, mixed
+with an area light and an environment or alone; primary hits through a thin lens) with the same cells.
 """
 import functools
 import tempfile
@@ -23,7 +25,8 @@ import pytest
 import restir
 from restir.validation import IndependentRuns
 from tests.helpers import MATRIX_CAMERAS, check
-from tests.scenes import bump_scene, half_dark_scene, mask_scene, shadow_scene
+from tests.helpers import LIGHT_MATRIX_SCENES
+from tests.scenes import bump_scene, feature_scene_named, half_dark_scene, mask_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
 
@@ -79,6 +82,8 @@ def scene(name):
         from tests.data.feature_scene import write_feature_scene
 
         return restir.load_scene(write_feature_scene(tempfile.mkdtemp()))
+    if name in LIGHT_MATRIX_SCENES:
+        return feature_scene_named(name)
     return restir.load_scene(f"builtin:{name}")
 
 
@@ -116,4 +121,11 @@ BUMP_CELLS = ["C1-light-32-bsdf-1", "C2-cap-20", "C3-k4-rounds-3", "C4-defaults"
 @pytest.mark.parametrize("config", BUMP_CELLS)
 @pytest.mark.parametrize("name", ["bumps", "masks"])
 def test_restir_di_matrix_on_bump_maps_and_masks(name, config):
+    test_restir_di_matrix(name, config)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", BUMP_CELLS)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+def test_restir_di_matrix_on_delta_lights_and_a_lens(name, config):
     test_restir_di_matrix(name, config)

@@ -13,13 +13,15 @@ tile (8x8) and pixel level, alpha = 1e-3 per configuration; the MDB (80% power, 
 printed and bounded per scene (the emissive-cap sphere has an exact reference instead).
 
 Scenes: the glossy Cornell box, veach-bidir and veach-mis (shared scenes), the emissive-cap
-sphere (A1) and the indirect room (light hidden from the camera, glossy surfaces); and the bump-map
-scene (tests/data/feature_scene.py) with the cells of BUMP_CELLS.
+sphere (A1) and the indirect room (light hidden from the camera, glossy surfaces); the bump-map
+scene (tests/data/feature_scene.py) with the cells of BUMP_CELLS; and the delta-light and thin-lens
+scenes (tests/data/feature_scene.py: point, spot and directional lights mixed with an area light
+and an environment, the points and spots alone, the sun alone, a thin lens) with LIGHT_CELLS.
 """
 
 import pytest
 
-from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
@@ -100,6 +102,21 @@ def test_restir_pt_matrix(name, config):
 @pytest.mark.parametrize("config", BUMP_CELLS)
 @pytest.mark.parametrize("name", PARTIAL_MATRIX_SCENES)
 def test_restir_pt_matrix_on_bump_maps_and_masks(name, config):
+    settings, motion = MATRIX[config]
+    print(config, end=" ")
+    run_cell(name, "restir-pt", settings, motion, config)
+
+
+# on the delta-light and thin-lens scenes: candidates alone, every shift, temporal reuse, the defaults
+# still and moving, and MCMC suffix mutations (a fresh light sample at z may change the light's kind)
+LIGHT_CELLS = ["C1-candidates-1", "C3-hybrid-k3", "C3-reconnection-k3", "C3-replay-k3", "C2-cap-20", "C4-defaults",
+               "C4-orbit", "C6-mcmc-z"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", LIGHT_CELLS)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+def test_restir_pt_matrix_on_delta_lights_and_a_lens(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
     run_cell(name, "restir-pt", settings, motion, config)

@@ -17,7 +17,7 @@ mask scenes, the cells of BUMP_CELLS. Welch z per channel at image, tile and pix
 import pytest
 
 from restir.integrators.suffix_restir.pipeline import MMIS_BASELINE
-from tests.helpers import FULL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 # The official prototype's direct light, the ReSTIR DI component: the default until 2026-12-06, when
@@ -85,6 +85,21 @@ def test_suffix_restir_matrix_many_prefixes(name, config):
 @pytest.mark.parametrize("config", BUMP_CELLS)
 @pytest.mark.parametrize("name", PARTIAL_MATRIX_SCENES)
 def test_suffix_restir_matrix_on_bump_maps_and_masks(name, config):
+    settings, motion = MATRIX[config]
+    print(config, end=" ")
+    run_cell(name, "suffix-restir", settings, motion, config)
+
+
+# on the delta-light and thin-lens scenes (tests/helpers.py LIGHT_MATRIX_SCENES): the gather alone,
+# each reuse, the shifts, the defaults still and moving
+LIGHT_CELLS = ["C5-gather-N2-M4", "C5-prefix-temporal", "C5-suffix-temporal", "C5-suffix-spatial", "C5-all",
+               "C5-reconnection", "C5-orbit"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", LIGHT_CELLS)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+def test_suffix_restir_matrix_on_delta_lights_and_a_lens(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
     run_cell(name, "suffix-restir", settings, motion, config)
