@@ -75,3 +75,22 @@ def test_inlined_shift_is_the_shift_bit_for_bit(shift):
     inlined = run_round_trips(integ, integ.params(0, 0), gb, res, inlined=True)
     assert out[:, 6].sum() > 100  # forward shifts that succeed
     assert np.array_equal(out, inlined)
+
+
+@pytest.mark.parametrize("shift", ["hybrid", "reconnection", "replay"])
+@pytest.mark.parametrize("scene", ["delta-lights", "thinlens"])
+def test_identity_and_round_trip_with_delta_lights_and_a_lens(scene, shift):
+    """The same properties on paths that end on point, spot and directional lights (mixed with an
+    area light and an environment), and on primary hits through a thin lens
+    (tests/data/feature_scene.py); a good share of the paths must end with NEE on a delta light."""
+    from restir.integrators.path_reuse.path_sample import PATH_NONE
+    from tests.scenes import feature_scene_named
+
+    s = feature_scene_named(scene)
+    s.camera.width = s.camera.height = 48
+    integ, res, gb = base_paths(s, shift, "pt")
+    flags = res.numpy()["flags"]
+    delta_ends = (flags != PATH_NONE) & ((flags >> 22) & 1 == 1) & ((flags >> 27) & 1 == 1)
+    print(scene, "paths ending with NEE on a delta light:", delta_ends.sum(), "of", (flags != PATH_NONE).sum())
+    assert delta_ends.sum() > 200
+    assert_identity_and_round_trip(run_round_trips(integ, integ.params(0, 0), gb, res), shift, f"{scene} {shift}")
