@@ -195,7 +195,10 @@ MATRIX_RUNS = {("indirect-room", "C4-direct-pt"): 128,
                ("veach-bidir", "C6-mcmc-orbit"): 384, ("masks", "C4-defaults"): 128,
                # the defaults with independent neighbours, as the defaults' own cells
                ("indirect-room", "C4-independent"): 128, ("indirect-room", "C4-independent-orbit"): 128,
-               ("veach-bidir", "C4-independent-orbit"): 384}
+               ("veach-bidir", "C4-independent-orbit"): 384,
+               # ReSTIR PT's defaults under delta lights: MDB 7.0% (mixed lights) and 5.9% (points and
+               # spots alone) at 64 runs, the z-tests passing
+               **{(n, c): 128 for n in ("delta-lights", "delta-only") for c in ("C4-defaults", "C4-orbit")}}
 
 
 def matrix_runs(name, method, settings, motion, spp, seed0, runs=None):
@@ -215,6 +218,19 @@ def matrix_reference(name, motion):
     return matrix_runs(name, "pt", {}, motion, MATRIX_REFERENCE_SPP.get(name, 16), 9000)
 
 
+def dead_stages(stats: list) -> list:
+    """The reuse passes whose shifts were tried and never succeeded over all of a cell's runs
+    (each run's own `reuse_dead` summed: a pass that tries a few shifts a run, as Suffix ReSTIR's
+    suffix spatial reuse in a room where most suffixes escape, can see none succeed in one run of
+    64 by chance alone, 19 tries at a 14% success rate)."""
+    tried, ok = {}, {}
+    for st in stats:
+        for stage, kinds in st["shifts"].items():
+            tried[stage] = tried.get(stage, 0) + sum(k["tried"] for k in kinds.values())
+            ok[stage] = ok.get(stage, 0) + sum(k["succeeded"] for k in kinds.values())
+    return [stage for stage in tried if tried[stage] > 0 and ok[stage] == 0]
+
+
 def run_cell(name, method, settings, motion, config=""):
     """One matrix cell: K runs of `method` on scene `name` against its reference (the sphere:
     the exact value); asserts a sound render (no fault injection, no dead reuse) and the MDB
@@ -225,7 +241,8 @@ def run_cell(name, method, settings, motion, config=""):
                     "runs": runs, "frames": frames, "bound": bound}) as entry:
         r = matrix_runs(name, method, settings, motion, 1, 100, runs)
         assert all(s["settings"]["debug.mutation"] == "none" for s in r.stats)
-        assert not any(s["reuse_dead"] for s in r.stats), r.stats[0]["shifts"]
+        dead = dead_stages(r.stats)
+        assert not dead, f"reuse dead in {dead}: {r.stats[0]['shifts']}"
         if name == "sphere-cap":
             args = (r, sphere_cap_radiance(0.5, 1.0, 0.05, depth), 0.0, dict(rel_tol=ANALYTIC_REL_TOL))
         else:

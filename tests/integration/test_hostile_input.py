@@ -62,6 +62,11 @@ SCENES = [
      "parameter 'reflectance' must be non-negative"),
     ("bitmap_empty_pfm.xml", "bitmap_empty_pfm.xml:6", "cannot read image 'empty_texture.pfm': has no pixels (0x0)"),
     ("bitmap_empty_hdr.xml", "bitmap_empty_hdr.xml:6", "cannot read image 'empty_texture.hdr': has no pixels (0x0)"),
+    ("spot_beam_wider_than_cutoff.xml", "spot_beam_wider_than_cutoff.xml:6",
+     "beam_width must be in [0, cutoff_angle] degrees"),
+    ("thinlens_without_aperture.xml", "thinlens_without_aperture.xml:2",
+     "'thinlens' needs the parameter 'aperture_radius'"),
+    ("point_nan_position.xml", "point_nan_position.xml:6", "non-finite value in '0, nan, 1'"),
 ]
 
 # (reference image in tests/data/hostile for restir compare --reference, the refusal's text)

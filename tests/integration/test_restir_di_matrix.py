@@ -66,6 +66,11 @@ SCENES = ["features", "half-dark", "shadow", "cornell-box-glossy"]
 # Cornell box the pixels on the edge of its small, bright light dominate the variance).
 SCENE_SETTINGS = {"half-dark": {"candidates": 1}}
 SCENE_SPP = {"cornell-box-glossy": 4}
+# The sun alone at max_depth 2: ReSTIR DI's estimate is the path tracer's at every pixel away from a
+# shadow's edge (the one light is chosen with probability 1; measured: the two agree to 4e-7 per
+# pixel with the same camera samples), so most tiles have next to no variance and float32 sums
+# differ there by about 1e-5: deviations below 1e-4 relative count as zero, as in the Mitsuba tests.
+SCENE_REL_TOL = {"sun": 1e-4}
 
 
 @functools.lru_cache(maxsize=None)
@@ -108,7 +113,7 @@ def test_restir_di_matrix(name, config):
     di = runs(name, "restir-di", SCENE_SPP.get(name, 1), 10_000, motion, settings)
     ref = reference(name, motion)
     print(name, config, settings, f"K={RUNS} T={FRAMES} {SIZE}x{SIZE}", "counters", di.counters)
-    rep = check(di, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    rep = check(di, ref.image, ref.batch_variance_of_mean, other=ref, tile=8, rel_tol=SCENE_REL_TOL.get(name, 0.0))
     assert rep.mdb < 0.08
 
 

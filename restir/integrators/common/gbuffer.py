@@ -37,10 +37,18 @@ def allocate_gbuffer(integrator, name: str, store_rays: bool = False) -> GBuffer
     return gb
 
 
+LENS_MUTATION = "lens_rays_from_centre"  # a fault injection of the pipelines (common/mutations.py)
+
+
 def allocate_primary_gbuffer(integrator, name: str) -> GBuffer:
     """A G-buffer of primary hits: the rays are rebuilt from the camera's position, or stored
-    where a thin lens starts each at a point of its own."""
-    return allocate_gbuffer(integrator, name, store_rays=integrator.dscene.camera.aperture_radius > 0.0)
+    where a thin lens starts each at a point of its own. (The mutation LENS_MUTATION rebuilds a
+    thin lens's rays from the lens's centre: every primary hit then sees a direction toward the
+    camera that is not its ray's.)"""
+    thin_lens = integrator.dscene.camera.aperture_radius > 0.0
+    if getattr(integrator.settings, "debug_mutation", "none") == LENS_MUTATION:
+        thin_lens = False
+    return allocate_gbuffer(integrator, name, store_rays=thin_lens)
 
 
 def set_camera_origin(gb: GBuffer, camera) -> None:

@@ -86,7 +86,7 @@ def shift_counts(r: PathReservoir, res: ShiftResult) -> wp.vec4i:
 
 
 MUTATIONS = ("bsdf_twice", "invert_jacobian", "drop_rc_pdf", "keep_source_jacobian", "misaligned_replay",
-             "skip_destination_criteria")
+             "skip_destination_criteria", "delta_light_mis")
 
 
 _replay_prefixes: dict = {}  # each build's prefix replay, by mutation (tests replay prefixes as the shift does)
@@ -112,6 +112,7 @@ def make_shift(mutation: str = "none", inline: bool = False):
     keep_source_jacobian = mutation == "keep_source_jacobian"  # cached terms not overwritten
     dim_offset = 1 if mutation == "misaligned_replay" else 0   # replay reads the next bounce's numbers
     check_destination = mutation != "skip_destination_criteria"
+    delta_light_mis = mutation == "delta_light_mis"     # NEE at z weighted against BSDF sampling for a delta light too
 
     @wp.func(module=module, name=named("replay_prefix"))
     def replay_prefix(scene: SceneDevice, params: PathReuseParams, x0: Shading, seed: wp.uint32, n: int) -> Replay:
@@ -262,7 +263,7 @@ def make_shift(mutation: str = "none", inline: bool = False):
                     # sample itself does not move (z does not), so J has no factor at the light.
                     f_z = bsdf_eval(mat_z, wi_z, wo_z)
                     p_sum = r.light_pdf
-                    if ends_on_delta_light(flags) == 0:
+                    if ends_on_delta_light(flags) == 0 or wp.static(delta_light_mis):
                         p_sum += bsdf_pdf(mat_z, wi_z, wo_z)
                     F = wp.cw_mul(w_y, wp.cw_mul(f_z, r.rc_L)) / p_sum
                     jac = wp.vec2(G * e.p, 1.0)

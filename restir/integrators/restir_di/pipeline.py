@@ -10,7 +10,7 @@ import warp as wp
 from ...device.streams import DI_MAX_CANDIDATES, DI_MAX_NEIGHBORS
 from ...settings import MUTATION_DOC, Settings, setting
 from ..base import Integrator
-from ..common.gbuffer import PingPong, allocate_primary_gbuffer
+from ..common.gbuffer import LENS_MUTATION, PingPong, allocate_primary_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel, trace_primary_hits
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -32,6 +32,8 @@ MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
     "temporal_overweight": lambda: (make_initial_temporal_kernel(overweight_history=True), spatial_kernel),  # feedback
     "spatial_in_place": None,        # the spatial pass writes its own input (race, R2)
     "bsdf_unshadowed_reuse": None,   # lets check_settings accept a biased combination
+    # a thin lens's primary rays rebuilt from the lens's centre (common/gbuffer.py)
+    LENS_MUTATION: None,
 })
 
 

@@ -12,6 +12,7 @@ import warp as wp
 
 from ...device.streams import PT_MAX_MCMC_STEPS, PT_MAX_NEIGHBORS
 from ...settings import EMISSION_RAYS_DOC, MUTATION_DOC, setting
+from ..common.gbuffer import LENS_MUTATION
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.spatial_settings import SpatialReuseSettings, spatial_reuse
@@ -53,6 +54,8 @@ MUTATIONS = Mutations((trace_temporal_kernel, mcmc_kernel, spatial_kernel, recip
         make_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts"),
         make_reciprocal_spatial_kernel(drop_failed=True, module="restir_pt_drop_failed_shifts")),
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
+    # a thin lens's primary rays rebuilt from the lens's centre (common/gbuffer.py)
+    LENS_MUTATION: None,
     # direct=nee whose trace stage also resamples the events at x_0 it sums (first_event 0):
     # direct light counted twice
     "nee_also_resampled": None,

@@ -14,7 +14,7 @@ import warp as wp
 from ...device.streams import SR_MAX_GATHER_PREFIXES, SR_MAX_GATHER_SUFFIXES
 from ...settings import EMISSION_RAYS_DOC, MUTATION_DOC, setting
 from ..common.events import PassCounts
-from ..common.gbuffer import PingPong, allocate_gbuffer
+from ..common.gbuffer import LENS_MUTATION, PingPong, allocate_gbuffer
 from ..common.mutations import Mutations
 from ..common.primary_hits import primary_hits_kernel
 from ..common.reuse_domains import resolve_spatial_radius
@@ -43,6 +43,8 @@ MUTATIONS = Mutations((suffix_kernel, gather_kernel), {
     **{m: functools.partial(_suffix_mutant, m) for m in SUFFIX_MUTATIONS},
     **{m: functools.partial(_gather_mutant, m) for m in GATHER_MUTATIONS},
     "spatial_in_place": None,  # the spatial pass writes its own input (race, R2)
+    # a thin lens's primary rays rebuilt from the lens's centre (common/gbuffer.py)
+    LENS_MUTATION: None,
 })
 
 
