@@ -21,6 +21,8 @@ What it measures, each with the command line that reproduces it (in the JSON):
 - many-lights: ReSTIR DI on builtin:many-lights with the emitters hidden (lighting only), its
   defaults and without reuse (temporal=false, spatial.rounds=0), against the path tracer, through
   restir.compare (the command line cannot hide a builtin's emitters).
+- many-delta-lights: the same on builtin:many-delta-lights, the room lit by 300 point and spot
+  lights (nothing to hide: a delta light is never seen).
 - mitsuba: the path tracer against Mitsuba 3 (benchmarks/bench_pt_vs_mitsuba.py on the shared
   Cornell box) where the `mitsuba` package is installed; "not installed" otherwise.
 - loads: restir.load_scene and the upload to the device (the BVH and Embree builds) for every
@@ -57,7 +59,7 @@ sys.path.insert(0, ROOT)
 RESULTS = os.path.join("benchmarks", "results", "results.json")
 VERDICTS = os.path.join("benchmarks", "results", "verdicts.json")
 LOGS = os.path.join("out", "results_suite")
-PARTS = ("cost", "equal-time", "many-lights", "mitsuba", "loads", "verdicts")
+PARTS = ("cost", "equal-time", "many-lights", "many-delta-lights", "mitsuba", "loads", "verdicts")
 PYTHON = ".venv/bin/python"
 RESTIR = ".venv/bin/restir"
 
@@ -331,22 +333,30 @@ def gallery_image(report: str, name: str) -> dict:
     return {"file": path, "columns": ["reference", *methods]}
 
 
-def part_many_lights(args, size) -> dict:
+def many_light_comparison(args, size, part: str, hide_emitters: bool) -> dict:
+    """ReSTIR DI with and without reuse against the path tracer on builtin:<part>."""
     import restir
     from restir.compare import compare
 
     n = size["many_lights_size"]
-    scene = restir.load_scene("builtin:many-lights")
-    scene.hide_emitters = True
-    log(f"many lights: ReSTIR DI with and without reuse against the path tracer, {n}x{n}, "
-        f"{size['seconds']:g} s a method")
+    scene = restir.load_scene(f"builtin:{part}")
+    scene.hide_emitters = hide_emitters
+    log(f"{part}: ReSTIR DI with and without reuse against the path tracer, {n}x{n}, {size['seconds']:g} s a method")
     r = compare(scene, MANY_LIGHTS_METHODS, equal_time=size["seconds"], width=n, height=n,
                 reference_spp=size["reference_spp"], warmup=size["warmup"], seed=0, denoise=True,
                 correlation_runs=0)
     if r.interrupted:
         raise KeyboardInterrupt
-    return {"scene": "builtin:many-lights", "hide_emitters": True, "command": suite_command(args, ["many-lights"]),
+    return {"scene": f"builtin:{part}", "hide_emitters": hide_emitters, "command": suite_command(args, [part]),
             "seconds": size["seconds"], "no_reuse": NO_REUSE, **summarize_comparison(clean(r.to_dict()))}
+
+
+def part_many_lights(args, size) -> dict:
+    return many_light_comparison(args, size, "many-lights", hide_emitters=True)
+
+
+def part_many_delta_lights(args, size) -> dict:
+    return many_light_comparison(args, size, "many-delta-lights", hide_emitters=False)
 
 
 # ------------------------------------------------------------------ (d) Mitsuba 3
@@ -453,6 +463,7 @@ def part_verdicts(args, size) -> dict:
 
 # ------------------------------------------------------------------ the run
 RUNNERS = {"cost": part_cost, "equal-time": part_equal_time, "many-lights": part_many_lights,
+           "many-delta-lights": part_many_delta_lights,
            "mitsuba": part_mitsuba, "loads": part_loads, "verdicts": part_verdicts}
 
 

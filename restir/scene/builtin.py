@@ -226,6 +226,41 @@ def many_lights(width=256, height=256, spp=16, max_depth=-1, count=400, seed=7, 
     return scene
 
 
+def many_delta_lights(width=256, height=256, spp=16, max_depth=-1, count=300, seed=11) -> dict:
+    """The Cornell room without its light, lit by `count` delta lights of random colour and power:
+    two thirds point lights, hanging 10-20 cm below the ceiling or standing 10-20 cm off the side
+    walls, and one third spot lights 10-20 cm below the ceiling, each aimed at a random point of the
+    floor with a cone of 20-50 degrees (Mitsuba 3's falloff; ReSTIR DI's many-light benchmark made
+    of the lights engines use). Deterministic for a seed. The gap keeps every light at least
+    10 cm from a surface, so I / d^2 stays within 100 I (the many-lights room's reason, there for
+    G's 1 / d^2)."""
+    scene = cornell_box(width=width, height=height, spp=spp, max_depth=max_depth)
+    del scene["light"]
+    rng = np.random.default_rng(seed)
+    for i in range(count):
+        a, b = rng.uniform(0.1, 0.45, 2)
+        gap = rng.uniform(0.1, 0.2)
+        hue = rng.uniform(0.2, 1.0, 3)
+        color = hue * rng.uniform(2e-4, 1.3e-3)  # about the Cornell box's direct light in all
+        if i % 3 == 2:  # a spot under the ceiling, aimed at the floor
+            p = np.array([a, 0.5488 - gap, b])
+            target = np.array([rng.uniform(0.05, 0.5), 0.0, rng.uniform(0.05, 0.5)])
+            cutoff = rng.uniform(20, 50)
+            scene[f"light{i}"] = {"type": "spot", "to_world": _look_at(p, target, [0, 0, 1]),
+                                  "cutoff_angle": float(cutoff), "beam_width": float(cutoff * rng.uniform(0.3, 0.9)),
+                                  "intensity": {"type": "rgb", "value": list(color * 4.0)}}
+            continue
+        wall = rng.integers(0, 3)  # ceiling, left wall, right wall
+        if wall == 0:
+            p = np.array([a, 0.5488 - gap, b])
+        elif wall == 1:
+            p = np.array([0.5525 - gap, 0.34 + 0.4 * (a - 0.1), b])
+        else:
+            p = np.array([gap, 0.34 + 0.4 * (a - 0.1), b])
+        scene[f"light{i}"] = {"type": "point", "position": list(p), "intensity": {"type": "rgb", "value": list(color)}}
+    return scene
+
+
 def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.0) -> dict:
     """The Cornell room lit almost only indirectly (ReSTIR PT's test and benchmark scene): its
     light, 1.5x larger and `radiance_scale` x brighter, hangs 6 cm below the ceiling facing up,
@@ -262,6 +297,7 @@ BUILTINS = {
     "furnace": furnace,
     "sphere-cap": sphere_cap,
     "many-lights": many_lights,
+    "many-delta-lights": many_delta_lights,
     "indirect-room": indirect_room,
 }
 
@@ -276,6 +312,7 @@ BUILTIN_DESCRIPTIONS = {
                   f"(docs/validation.md#level-2-analytic-scenes-and-external-references); "
                   f"max_depth {ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH - 1}; -1: unbounded)",
     "many-lights": "the Cornell room lit by 400 small coloured emitters (ReSTIR DI's benchmark)",
+    "many-delta-lights": "the Cornell room lit by 300 coloured point and spot lights (ReSTIR DI's benchmark, delta lights)",
     "indirect-room": "the Cornell room lit almost only indirectly (light hidden, facing the ceiling), glossy "
                      "floor, block and wall (ReSTIR PT's benchmark)",
 }
