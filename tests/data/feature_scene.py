@@ -393,4 +393,6 @@ SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bum
           "masks": write_mask_scene, "delta-lights": write_delta_scene, "thinlens": write_thinlens_scene,
           # the delta lights alone: points and spots (no other light), and the sun
           "delta-only": lambda d: write_delta_scene(d, ("point", "spot")),
-          "sun": lambda d: write_delta_scene(d, ("directional",))}
+          "sun": lambda d: write_delta_scene(d, ("directional",)),
+          # the delta-light scene again, for a Mitsuba 3 reference of its direct light (max_depth 2)
+          "delta-lights-direct": write_delta_scene}

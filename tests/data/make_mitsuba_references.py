@@ -33,6 +33,7 @@ REFERENCES = {
     "masks": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: mask by texture (luminance) and constant, around bumpmap, conductors
     "delta-lights": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: point, spot, directional, area light, constant env
     "thinlens": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: the same room through a thin lens
+    "delta-lights-direct": (48, 36, 2, 4096, 16),  # the delta-light scene's direct light (ReSTIR DI's depth)
     "veach-ajar": (64, 36, 13, 4096, 16),
     "staircase2": (64, 36, 65, 4096, 16),  # Mitsuba 0.5 as distributed; its own max_depth
 }
