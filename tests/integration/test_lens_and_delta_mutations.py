@@ -27,8 +27,7 @@ import pytest
 
 import restir
 from restir.validation.check import compare
-from tests.unit.test_pt_shifts import base_paths
-from tests.unit.shift_harness import run_round_trips
+from tests.unit.shift_harness import base_paths, run_round_trips
 
 # A glossy floor reflecting a long light, seen through a wide lens focused in front of it: the
 # reflection is out of focus, so the direction toward the lens point matters at every pixel of it
@@ -162,3 +161,76 @@ def test_defects_in_what_a_delta_light_sends_are_caught_by_mitsuba(mutation, tmp
         assert p.returncode == 0, "the unmutated copy of delta_arrival does not match Mitsuba 3"
     else:
         assert p.returncode == 3, "the mutant matched Mitsuba 3 (or the script failed)"
+
+
+# ReSTIR DI with the spot's falloff dropped from its target function alone (the initial candidates'
+# p_hat and every reuse pass's target), while the shade stage's integrand keeps it: a worse target,
+# positive wherever the integrand is, so an unbiased estimate (docs/theory/ris.md). The patch takes
+# `unshadowed_contribution` away from the reservoir module's targets and the initial stage, not from
+# the shade stage (which imported its own name); run with "none", the same script is the shipped build.
+TARGET_SCRIPT = r'''
+import sys
+import numpy as np
+import warp as wp
+import restir.integrators.restir_di.reservoir as reservoir
+import restir.integrators.restir_di.s1_initial as s1
+from restir.device.bsdf import bsdf_eval
+from restir.device.delta_lights import delta_arrival, delta_light_index, is_delta_light
+from restir.device.sampling import to_local
+from restir.device.scene_device import SceneDevice
+from restir.device.types import DELTA_DIRECTIONAL
+from restir.integrators.common.shading import Shading
+
+shipped = reservoir.unshadowed_contribution
+
+
+@wp.func
+def target_without_falloff(scene: SceneDevice, sh: Shading, r: reservoir.DIReservoir) -> wp.vec3:
+    if is_delta_light(r.light_tri):
+        l = scene.delta_lights[delta_light_index(r.light_tri)]
+        a = delta_arrival(l, sh.hit.p)
+        if a.dist <= 0.0:
+            return wp.vec3(0.0)
+        Le = l.I
+        if l.kind != DELTA_DIRECTIONAL:
+            Le = l.I / (a.dist * a.dist)
+        return wp.cw_mul(bsdf_eval(sh.mat, sh.wi, to_local(sh.frame, a.wi)), Le)
+    return shipped(scene, sh, r)
+
+
+if sys.argv[1] == "patch":
+    reservoir.unshadowed_contribution = target_without_falloff
+    s1.unshadowed_contribution = target_without_falloff
+import restir
+from restir.validation import IndependentRuns
+from restir.validation.check import compare
+from tests.scenes import feature_scene_named
+
+scene = feature_scene_named("delta-only")
+cfg = dict(spp=1, frames=8, width=32, height=32, max_depth=2)
+di = IndependentRuns(scene, restir.RenderConfig(method="restir-di", **cfg), 64, 100)
+ref = IndependentRuns(scene, restir.RenderConfig(method="pt", **{**cfg, "spp": 16}), 64, 9000)
+rep = compare(di, ref.image, ref.batch_variance_of_mean, other=ref)
+print(sys.argv[1], "MDB", rep.mdb)
+print(rep)
+np.save(sys.argv[2], di.image)
+sys.exit(0 if rep.passed else 3)
+'''
+
+
+@pytest.mark.slow
+def test_a_falloff_dropped_from_the_target_alone_stays_unbiased(tmp_path):
+    """Measured: see docs/validation.md#power-checks-the-mutation-table."""
+    script = tmp_path / "target.py"
+    script.write_text(TARGET_SCRIPT)
+    root = os.path.normpath(os.path.join(os.path.dirname(__file__), "..", ".."))
+    env = {**os.environ, "PYTHONPATH": root + os.pathsep + os.environ.get("PYTHONPATH", ""),
+           "WARP_CACHE_PATH": str(tmp_path / "warp")}
+    images = {}
+    for build in ("none", "patch"):
+        p = subprocess.run([sys.executable, str(script), build, str(tmp_path / f"{build}.npy")], capture_output=True,
+                           text=True, env=env, timeout=1800)
+        print(p.stdout[-2500:], p.stderr[-1500:])
+        assert p.returncode == 0, f"{build}: ReSTIR DI does not match the path tracer"
+        images[build] = np.load(tmp_path / f"{build}.npy")
+    assert np.any(images["none"] != images["patch"]), "the patch did not reach the kernels"

@@ -34,6 +34,21 @@ from restir.integrators.path_reuse.path_sample import (NO_RC, RC_ENV, RC_SURFACE
 from restir.integrators.path_reuse.shift import Replay, _replay_prefixes, make_shift, shift_path
 
 
+def base_paths(scene, shift, direct="restir-di", max_depth=5, device="cpu"):
+    """One frame of ReSTIR PT's base paths on `scene` (no reuse): (integrator, their reservoirs,
+    the G-buffer of their primary hits)."""
+    import restir
+    from restir.api import make_integrator
+
+    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=1, seed=7, device=device,
+                              max_depth=max_depth,
+                              settings={"shift": shift, "direct": direct, "temporal": False, "spatial.rounds": 0})
+    integ = make_integrator(scene, cfg)
+    integ.render_frame(0)
+    # after the frame, the final reservoirs and G-buffer are the "previous" ones
+    return integ, integ.reservoirs.previous, integ.gbuffers.previous
+
+
 H = 4.0e-3
 N_OUT = 10  # [ok, J (shift), J (finite differences), rc length, rc kind, z factor, material at z, at rcPrev,
 

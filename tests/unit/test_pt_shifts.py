@@ -14,18 +14,7 @@ import numpy as np
 import pytest
 
 import restir
-from restir.api import make_integrator
-from tests.unit.shift_harness import assert_identity_and_round_trip, run_round_trips
-
-
-def base_paths(scene, shift, direct="restir-di", max_depth=5, device="cpu"):
-    cfg = restir.RenderConfig(method="restir-pt", spp=1, frames=1, seed=7, device=device,
-                              max_depth=max_depth,
-                              settings={"shift": shift, "direct": direct, "temporal": False, "spatial.rounds": 0})
-    integ = make_integrator(scene, cfg)
-    integ.render_frame(0)
-    # after the frame, the final reservoirs and G-buffer are the "previous" ones
-    return integ, integ.reservoirs.previous, integ.gbuffers.previous
+from tests.unit.shift_harness import assert_identity_and_round_trip, base_paths, run_round_trips
 
 
 def round_trips(scene_spec, shift, direct="restir-di", offset=3, size=48, mutation="none", **kw):
