@@ -46,12 +46,6 @@ class DeltaArrival:
 
 
 @wp.func
-def delta_light_id(i: int) -> int:
-    """The light identity (a light sample's `tri`, a reservoir's light) of delta light i."""
-    return LIGHT_DELTA_BASE - i
-
-
-@wp.func
 def is_delta_light(light_id: int) -> bool:
     return light_id <= LIGHT_DELTA_BASE
 

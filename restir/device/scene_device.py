@@ -31,7 +31,7 @@ class SceneDevice:
     material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
     # The lights other than the environment, chosen in proportion to power by one Walker alias
     # table: light_tri holds the emissive triangles first (num_tri_lights of them), then the delta
-    # lights' identities (delta_lights.delta_light_id)
+    # lights' identities (LIGHT_DELTA_BASE - i for delta light i, types.py)
     light_tri: wp.array(dtype=wp.int32)
     light_prob: wp.array(dtype=float)
     light_alias: wp.array(dtype=wp.int32)

@@ -13,18 +13,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-KINDS = ("point", "spot", "directional")
-FALLOFFS = ("linear_angle", "smoothstep", "squared_ramp")
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
 
 @dataclass
 class DeltaLightDesc:
-    kind: str                      # one of KINDS
+    kind: str                      # "point", "spot" or "directional"
     intensity: np.ndarray          # RGB: W/sr (point, spot) or irradiance W/m^2 (directional)
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
     axis: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))  # spot: shines along; directional: travels along
-    falloff: str = "linear_angle"  # spot: one of FALLOFFS
+    falloff: str = "linear_angle"  # spot: "linear_angle", "smoothstep" or "squared_ramp"
     inner: float = 0.0             # spot: half-angles in radians, inner <= outer
     outer: float = 0.0
 

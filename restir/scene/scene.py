@@ -289,6 +289,9 @@ class _Builder:
             focus = p.float("focus_distance", far_clip)
             if focus <= 0:
                 raise SceneError("focus_distance must be positive", p._loc_of("focus_distance"))
+        elif p.has("aperture_radius"):  # ignored, it would render a pinhole's image
+            raise SceneError("aperture_radius needs a thinlens sensor (this one is perspective: a pinhole)",
+                             p._loc_of("aperture_radius"))
         elif p.has("focus_distance"):
             p.float("focus_distance")  # a pinhole's focus distance changes nothing
         width, height, filt = 768, 576, ("gaussian", 2.0, 0.5)
@@ -709,6 +712,10 @@ class _Builder:
                 raise SceneError("the directional emitter's direction is zero", p.loc)
             light = DeltaLightDesc("directional", value, axis=axis / np.linalg.norm(axis))
         else:
+            for wrong in ("position", "direction"):
+                if p.has(wrong):  # ignored, it would leave the spot at the origin, shining along +z
+                    raise SceneError(f"a spot emitter is placed and aimed by 'to_world' (Mitsuba 3 has no '{wrong}' "
+                                     "for it)", p._loc_of(wrong))
             if p.has("texture"):
                 raise SceneError("a spot emitter's 'texture' (a projected image) is not supported", p._loc_of("texture"))
             axis = m[:3, :3] @ np.array([0.0, 0.0, 1.0])

@@ -65,6 +65,8 @@ def test_point_spot_and_directional_are_read_as_mitsuba_defines_them(tmp_path):
     ('<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>', "direction is zero"),
     ('<emitter type="point"><rgb name="intensity" value="-1"/></emitter>', "non-negative"),
     ('<emitter type="spot"><texture name="texture" type="checkerboard"/></emitter>', "texture"),
+    ('<emitter type="spot"><point name="position" value="0, 1, 0"/></emitter>', "placed and aimed by 'to_world'"),
+    ('<emitter type="spot"><vector name="direction" value="0, -1, 0"/></emitter>', "placed and aimed by 'to_world'"),
 ])
 def test_bad_delta_lights_are_refused(tmp_path, emitters, message):
     with pytest.raises(SceneError, match=message):
@@ -79,6 +81,8 @@ def test_thinlens_is_read_and_checked(tmp_path):
     assert s.camera.focus_distance == 3.0
     with pytest.raises(SceneError, match="aperture_radius"):
         load(tmp_path, sensor="thinlens")  # Mitsuba 3 requires it
+    with pytest.raises(SceneError, match="aperture_radius needs a thinlens sensor"):
+        load(tmp_path, lens='<float name="aperture_radius" value="0.2"/>')  # on a perspective sensor
     with pytest.raises(SceneError, match="focus_distance"):
         load(tmp_path, sensor="thinlens",
              lens='<float name="aperture_radius" value="0.2"/><float name="focus_distance" value="-1"/>')
