@@ -51,6 +51,7 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
       ignored). `defines` is the same as a dict (the CLI's -D: there an unused name only warns).
     - `builtin:NAME`: keyword arguments go to the builtin (`width=`, `height=`, `spp=`, ...;
       `restir render --help` lists the builtins).
+    - a pbrt-v4 file (`.pbrt`; docs/guide/pbrt.md says what is read, refused and approximated).
     - a dict: a scene in `mi.load_dict`'s form ({"type": "scene", "sensor": {...}, ...}).
 
     `missing_textures="grey"` renders a bitmap whose file is missing as constant grey (0.5), with
@@ -78,6 +79,13 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
                     raise SceneError(f"unknown parameter(s) {', '.join(unknown)} (builtin:{name} takes "
                                      f"{', '.join(accepted)})", spec)
         return build_scene(builtin_scene(name, **params), name, missing_textures, progress)
+    if spec.lower().endswith(".pbrt"):
+        if defines or params:
+            raise SceneError("parameters (-D, keywords) apply to Mitsuba XML files and builtins, not to pbrt-v4 files",
+                             spec)
+        from .scene.pbrt.reader import load_pbrt
+
+        return build_scene(load_pbrt(spec), spec, missing_textures, progress)
     merged = {k: _define_value(v) for k, v in {**(defines or {}), **params}.items()}
     return build_scene(load_xml(spec, merged, required=set(params)), spec, missing_textures, progress)
 

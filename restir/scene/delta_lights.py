@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+FALLOFFS = ("linear_angle", "smoothstep", "squared_ramp")
 
 
 @dataclass

@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import limits
 from . import shapes as shape_lib
-from .delta_lights import DeltaLightDesc
+from .delta_lights import FALLOFFS, DeltaLightDesc
 from .errors import SceneError, warn
 from .props import Props
 from .textures import FILTERS, WRAPS, TextureDesc, uv_transform
@@ -16,7 +16,7 @@ from .transforms import transform_normals, transform_points
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
              "roughplastic", "twosided", "bumpmap", "mask"},
-    "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh"},
+    "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh", "triangles"},
     "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
     "sensor": {"perspective", "thinlens"},
     "film": {"hdrfilm"},
@@ -584,6 +584,7 @@ class _Builder:
             raw = p.bool("raw", False)
             if os.path.exists(path):
                 img = _read_image(path, fname, p.loc, linearize_srgb=not raw)
+                img = self.texel_transform(p, img, path, fname, raw)
             elif self.missing_textures == "grey":
                 warn(f"texture file '{fname}' not found: rendered as constant grey {MISSING_GREY} "
                      "(--missing-textures grey); the image is not the scene's", p.loc)
@@ -596,6 +597,33 @@ class _Builder:
         p.warn_unqueried()
         self.textures.append(t)
         return len(self.textures) - 1
+
+    @staticmethod
+    def texel_transform(p: Props, img: np.ndarray, path: str, fname: str, raw: bool) -> np.ndarray:
+        """restir's bitmap extensions for other formats' textures (the pbrt-v4 loader's): `channels`
+        "average" (the mean of R, G and B in each channel) or "alpha" (the alpha channel, 1 where
+        the file has none), then `texel_scale` and `invert` (1 - value, at least 0), as pbrt-v4
+        applies its image textures' scale and invert."""
+        channels = p.string("channels", "rgb") if p.has("channels") else "rgb"
+        if channels == "average":
+            img = np.repeat(img.mean(axis=2, keepdims=True), 3, axis=2)
+        elif channels == "alpha":
+            from PIL import Image
+
+            try:
+                with Image.open(path) as im:
+                    has_alpha = im.mode in ("RGBA", "LA", "PA") or "transparency" in im.info
+                    a = np.asarray(im.convert("RGBA"))[..., 3].astype(np.float32) / 255.0 if has_alpha else None
+            except Exception:  # not a PIL image (EXR, HDR, PFM): no alpha channel read here
+                a = None
+            img = np.ones_like(img) if a is None else np.repeat(a[..., None], 3, axis=2)
+        elif channels != "rgb":
+            raise SceneError(f"bitmap: channels '{channels}' is not one of rgb, average, alpha", p._loc_of("channels"))
+        if p.has("texel_scale"):
+            img = img * np.float32(p.float("texel_scale"))
+        if p.has("invert") and p.bool("invert"):
+            img = np.maximum(np.float32(1.0) - img, np.float32(0.0))
+        return np.ascontiguousarray(img, np.float32)
 
     @staticmethod
     def choice(p: Props, name: str, default: str, allowed: tuple) -> str:
@@ -631,6 +659,9 @@ class _Builder:
             mesh = shape_lib.cube()
         elif t == "disk":
             mesh = shape_lib.disk()
+        elif t == "triangles":  # restir extension for other formats' loaders: a mesh in world space, read here
+            mesh = p.obj["load"]()
+            p.queried.add("load")
         elif t == "trimesh":  # restir extension for builtin scenes: inline vertices and faces
             mesh = shape_lib.TriMesh(np.asarray(p.obj["vertices"], float)[np.asarray(p.obj["faces"])], None,
                                      shape_lib.barycentric_uvs(len(p.obj["faces"])))
@@ -727,8 +758,10 @@ class _Builder:
                 raise SceneError("cutoff_angle must be in (0, 180] degrees", p._loc_of("cutoff_angle"))
             if not 0 <= beam <= cutoff:
                 raise SceneError("beam_width must be in [0, cutoff_angle] degrees", p._loc_of("beam_width"))
+            # `falloff`: restir's extension for other formats' spots (scene/delta_lights.py)
+            falloff = self.choice(p, "falloff", "linear_angle", FALLOFFS) if p.has("falloff") else "linear_angle"
             light = DeltaLightDesc("spot", value, position=m[:3, 3].astype(float), axis=axis / np.linalg.norm(axis),
-                                   falloff="linear_angle", inner=math.radians(beam), outer=math.radians(cutoff))
+                                   falloff=falloff, inner=math.radians(beam), outer=math.radians(cutoff))
         p.warn_unqueried()
         return light
 

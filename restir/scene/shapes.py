@@ -264,7 +264,7 @@ def _read_obj_lines(text: str, path: str):
     return (*floats, *[np.asarray(x, np.int64).reshape(-1, 3) for x in (fv, ft, fn)])
 
 
-def load_ply(path: str, loc: str) -> TriMesh:
+def load_ply(path: str, loc: str, smooth_missing_normals: bool = True) -> TriMesh:
     from plyfile import PlyData, PlyElementParseError
 
     try:
@@ -311,7 +311,7 @@ def load_ply(path: str, loc: str) -> TriMesh:
         if array is not None:
             check_finite_vertices(path, loc, np.asarray(array, np.float64), what)
     mesh = _from_indexed(v, f, n, uv)
-    if mesh.normals is None:
+    if mesh.normals is None and smooth_missing_normals:  # Mitsuba's PLY: smooth; pbrt-v4's: flat
         mesh.normals = smooth_normals(v, f)
     return mesh
 

@@ -67,6 +67,19 @@ SCENES = [
     ("thinlens_without_aperture.xml", "thinlens_without_aperture.xml:2",
      "'thinlens' needs the parameter 'aperture_radius'"),
     ("point_nan_position.xml", "point_nan_position.xml:6", "non-finite value in '0, nan, 1'"),
+    # pbrt-v4 files
+    ("pbrt_unterminated_string.pbrt", "pbrt_unterminated_string.pbrt:4", "unterminated string"),
+    ("pbrt_unknown_directive.pbrt", "pbrt_unknown_directive.pbrt:4", "unknown directive 'Shpe'"),
+    ("pbrt_bracket_unclosed.pbrt", "pbrt_bracket_unclosed.pbrt:4", "parameter 'P': '[' without ']'"),
+    ("pbrt_index_out_of_range.pbrt", "pbrt_index_out_of_range.pbrt:5",
+     "an index refers to vertex 7, but there are 3 vertices"),
+    ("pbrt_nan_value.pbrt", "pbrt_nan_value.pbrt:2", "'fov' holds a value that is not finite"),
+    ("pbrt_include_itself.pbrt", "pbrt_include_itself.pbrt:2", "Include nested more than 32 deep"),
+    ("pbrt_attribute_unbalanced.pbrt", "pbrt_attribute_unbalanced.pbrt:4", "AttributeEnd without AttributeBegin"),
+    ("pbrt_medium_unknown.pbrt", "pbrt_medium_unknown.pbrt:4", "unknown medium 'fog'"),
+    ("pbrt_shape_before_world.pbrt", "pbrt_shape_before_world.pbrt:2", "Shape must come after WorldBegin"),
+    ("pbrt_material_not_yet.pbrt", "pbrt_material_not_yet.pbrt:5", "material 'coatedconductor' is not supported"),
+    ("pbrt_binary.pbrt", "pbrt_binary.pbrt", "not a text file (byte 1 is not UTF-8)"),
 ]
 
 # (reference image in tests/data/hostile for restir compare --reference, the refusal's text)
@@ -162,11 +175,13 @@ def test_hostile_scenes_are_refused_with_file_and_line(name, where, message, tmp
     assert err.startswith(f"{HOSTILE / where}: error: ") and message in err, err
 
 
-@pytest.mark.parametrize("kind", ["device", "fifo", "folder", "huge"])
+@pytest.mark.parametrize("kind", ["device", "fifo", "folder", "huge", "pbrt fifo", "pbrt huge"])
 def test_scene_files_that_are_not_files_are_refused_before_reading(kind, tmp_path, capsys):
     """/dev/zero would be read without end, a FIFO would block the open, a 300 MiB file (sparse
-    here) would be read whole: each is refused from its stat."""
-    path = {"device": Path("/dev/zero"), "folder": tmp_path}.get(kind, tmp_path / "scene.xml")
+    here) would be read whole: each is refused from its stat (for either format)."""
+    name = "scene.pbrt" if kind.startswith("pbrt") else "scene.xml"
+    kind = kind.split()[-1]
+    path = {"device": Path("/dev/zero"), "folder": tmp_path}.get(kind, tmp_path / name)
     if kind == "fifo":
         os.mkfifo(path)
     elif kind == "huge":
