@@ -18,7 +18,7 @@ from .lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
 from .path_steps import LightConnection, Scatter, connect_to_light, scatter
 from .rng import rng_uniform, rng_uniform2
 from .sampling import Frame, frame_from_normal, to_local
-from .scene_device import SceneDevice, textured_material
+from .scene_device import SceneDevice, material_index_at, textured_material
 from .streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIMS_PER_BOUNCE
 from .types import ENV_NONE
 
@@ -35,7 +35,7 @@ def shading_frame(scene: SceneDevice, hit: SurfaceHit, wi: wp.vec3) -> Frame:
     """The frame the BSDF at a hit is evaluated in, wi (world) pointing back along the path: the
     one place the shading normal is decided, so every path loop, shift and target function sees
     the same one. A bump map tilts it (device/bump.py), which is where wi enters."""
-    b = scene.material_bump[scene.tri_material[hit.tri]]
+    b = scene.material_bump[material_index_at(scene, hit.tri, hit.uv)]
     if b.texture < 0:
         return frame_from_normal(hit.ns)
     return frame_from_normal(bump_normal(scene.positions, scene.uvs, scene.textures, scene.tex_pixels, b, hit.tri,
@@ -50,7 +50,7 @@ def material_at(scene: SceneDevice, hit: SurfaceHit, frame: Frame) -> Material:
     m = textured_material(scene, hit.tri, hit.uv)
     if m.bumped != 0:  # set in the scene's record of a bump-mapped material
         m.bump_n0 = to_local(frame, hit.ns)
-        m.bump_alpha2 = shadowing_alpha2(m.bump_n0, scene.material_bump[scene.tri_material[hit.tri]].shadowing)
+        m.bump_alpha2 = shadowing_alpha2(m.bump_n0, scene.material_bump[material_index_at(scene, hit.tri, hit.uv)].shadowing)
     return m
 
 

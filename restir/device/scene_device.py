@@ -8,7 +8,12 @@ import warp as wp
 from .bsdf import Material
 from .bump import Bump
 from .delta_lights import DeltaLight
+from .rng import hash_combine, hash_u32, u32_to_unit_float
 from .textures import Texture, scalar_of, texture_eval
+
+vec6i = wp.types.vector(length=6, dtype=wp.int32)
+# below this GGX alpha a textured roughness is held (pbrt-v4 would switch to a smooth lobe there)
+MIN_TEXTURED_ALPHA = wp.constant(1.0e-4)
 
 
 @wp.struct
@@ -26,8 +31,12 @@ class SceneDevice:
     tri_light_pdf: wp.array(dtype=float)   # P(select triangle) / area: NEE density in area measure
     materials: wp.array(dtype=Material)
     # per material, the texture index of reflectance, specular_reflectance, specular_transmittance,
-    # opacity (scene.py TEXTURED_PARAMETERS, in that order); -1: the material's constant holds
-    material_textures: wp.array(dtype=wp.vec4i)
+    # opacity, roughness, mixture amount (scene.py TEXTURED_PARAMETERS, in that order); -1: the
+    # material's constant holds
+    material_textures: wp.array(dtype=vec6i)
+    # per material: a mixture's two materials (-1, -1 for any other) and its constant amount
+    material_mix: wp.array(dtype=wp.vec2i)
+    material_mix_amount: wp.array(dtype=float)
     material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
     # The lights other than the environment, chosen in proportion to power by one Walker alias
     # table: light_tri holds the emissive triangles first (num_tri_lights of them), then the delta
@@ -72,12 +81,34 @@ def texture_or_constant(scene: SceneDevice, tex: int, uv: wp.vec2, constant: wp.
 
 
 @wp.func
+def material_index_at(scene: SceneDevice, tri: int, uv: wp.vec2) -> int:
+    """The material at a surface point: the triangle's, or for a mixture (pbrt-v4's `mix`) one of
+    its two, the second where a hash of the point (the triangle and its uv) falls below the amount,
+    as pbrt-v4 chooses by a hash of the point. A deterministic function of the point, so every
+    path loop, shift and target function sees the same material there; averaged over a pixel's
+    points the choice is the blend (1 - amount) f_a + amount f_b."""
+    i = scene.tri_material[tri]
+    mix = scene.material_mix[i]
+    if mix[0] < 0:
+        return i
+    amount = scene.material_mix_amount[i]
+    tex = scene.material_textures[i][5]
+    if tex >= 0:
+        amount = scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex, uv))
+    h = hash_combine(hash_u32(wp.uint32(tri)), wp.uint32(int(wp.clamp(uv[0], -1.0e6, 1.0e6) * 1048576.0)))
+    h = hash_combine(h, wp.uint32(int(wp.clamp(uv[1], -1.0e6, 1.0e6) * 1048576.0)))
+    if u32_to_unit_float(h) < amount:
+        return mix[1]
+    return mix[0]
+
+
+@wp.func
 def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
-    """The triangle's material with textured parameters resolved at uv: the one place textures
+    """The material at the point with textured parameters resolved at uv: the one place textures
     are read (a BSDF sees constants), so a parameter becomes texturable here and in the loader
     (scene.py `spectrum`), not in every material kind. What a BSDF is evaluated with is
     bounce.material_at's, which adds the bump map's terms to this."""
-    i = scene.tri_material[tri]
+    i = material_index_at(scene, tri, uv)
     m = scene.materials[i]
     tex = scene.material_textures[i]
     m.reflectance = texture_or_constant(scene, tex[0], uv, m.reflectance)
@@ -85,4 +116,10 @@ def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     m.specular_transmittance = texture_or_constant(scene, tex[2], uv, m.specular_transmittance)
     if tex[3] >= 0:  # a mask's opacity: the texture's eval_1, clipped to [0, 1] as in Mitsuba
         m.opacity = wp.clamp(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[3], uv)), 0.0, 1.0)
+    if tex[4] >= 0:  # an isotropic roughness: alpha, or pbrt-v4's roughness whose sqrt is alpha
+        r = wp.max(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[4], uv)), 0.0)
+        if m.roughness_remap != 0:
+            r = wp.sqrt(r)
+        m.alpha_u = wp.max(r, MIN_TEXTURED_ALPHA)
+        m.alpha_v = m.alpha_u
     return m

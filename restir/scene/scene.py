@@ -15,7 +15,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided", "bumpmap", "mask"},
+             "roughplastic", "twosided", "bumpmap", "mask", "mixture"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh", "triangles"},
     "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
     "sensor": {"perspective", "thinlens"},
@@ -40,9 +40,11 @@ IOR_TABLE = {
 
 # The parameters a texture may drive, in the order of SceneDevice.material_textures' components;
 # the loader reads the spectra with `spectrum()`, a mask's opacity (a scalar: the texture's
-# luminance) in `mask()`, and the device resolves each in `scene_device.textured_material`.
+# luminance) in `mask()`, a rough conductor's or dielectric's alpha (`roughness`, a scalar) in
+# `material_desc`, a mixture's amount in `mixture()`; the device resolves them in
+# `scene_device.textured_material` and `material_index_at`.
 TEXTURED_SPECTRA = ("reflectance", "specular_reflectance", "specular_transmittance")
-TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity",)
+TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity", "roughness", "amount")
 
 
 @dataclass
@@ -75,6 +77,9 @@ class MaterialDesc:
     bump: BumpDesc | None = None
     masked: bool = False       # Mitsuba 3's `mask` around the material (bsdf.py: the null lobe)
     opacity: float = 1.0       # its constant opacity (textured: textures["opacity"])
+    roughness_remap: bool = False  # a textured roughness holds pbrt-v4's roughness (alpha = sqrt), not alpha
+    mix: tuple[int, int] | None = None  # a mixture (pbrt-v4's `mix`): its two materials' indices
+    mix_amount: float = 0.0    # the probability of the second (textured: textures["amount"])
 
 
 def fresnel_diffuse_reflectance(eta: float) -> float:
@@ -361,6 +366,8 @@ class _Builder:
         if key in self.material_index:
             return self.material_index[key]
         p = self.props(obj, "bsdf")
+        if p.type == "mixture":
+            return self.mixture(obj, p)
         mask = None
         if p.type == "mask":
             mask, obj = self.mask(p)
@@ -387,6 +394,30 @@ class _Builder:
         self.materials.append(m)
         self.material_index[key] = len(self.materials) - 1
         return self.material_index[key]
+
+    def mixture(self, obj, p: Props) -> int:
+        """restir's `mixture` (the pbrt-v4 loader's `mix`): `bsdf_a` and `bsdf_b` and an `amount`
+        (a number or a texture, read as a scalar), each surface point taking b with probability
+        amount (scene_device.material_index_at)."""
+        inner = [p.obj.get("bsdf_a"), p.obj.get("bsdf_b")]
+        if not all(isinstance(b, dict) for b in inner):
+            raise SceneError("mixture needs the BSDFs 'bsdf_a' and 'bsdf_b'", p.loc)
+        p.queried.update(("bsdf_a", "bsdf_b"))
+        ids = [self.material(p.resolve(b) if b.get("type") == "ref" else b) for b in inner]
+        if any(self.materials[i].mix is not None for i in ids):
+            raise SceneError("a mixture of mixtures is not supported", p.loc)
+        m = MaterialDesc(kind="mixture", mix=(ids[0], ids[1]))
+        v = p.color_or_texture("amount", np.full(3, 0.5))
+        if isinstance(v, dict):
+            m.textures["amount"] = self.texture(v)
+        else:
+            if not np.all(v == v[0]):
+                raise SceneError("a mixture's amount is one number, not a colour", p._loc_of("amount"))
+            m.mix_amount = float(np.clip(v[0], 0.0, 1.0))
+        p.warn_unqueried()
+        self.materials.append(m)
+        self.material_index[id(obj)] = len(self.materials) - 1
+        return len(self.materials) - 1
 
     def bumpmap(self, p: Props) -> tuple[BumpDesc, dict]:
         """Mitsuba 3's `bumpmap`: exactly one height texture and one BSDF (which may be a twosided;
@@ -541,8 +572,13 @@ class _Builder:
             m.distribution = p.string("distribution", "beckmann")
             if m.distribution not in ("beckmann", "ggx"):
                 raise SceneError(f"unknown microfacet distribution '{m.distribution}'", p.loc)
+            alpha = p.color_or_texture("alpha", np.full(3, 0.1)) if p.has("alpha") else None
             if p.has("alpha_u") or p.has("alpha_v"):
                 m.alpha_u, m.alpha_v = p.float("alpha_u"), p.float("alpha_v")
+            elif isinstance(alpha, dict):  # textured (Mitsuba 3's texturable alpha; pbrt-v4's roughness)
+                m.textures["roughness"] = self.texture(alpha)
+                m.roughness_remap = p.bool("remap_roughness", False)
+                m.alpha_u = m.alpha_v = 0.1  # replaced at every hit
             else:
                 m.alpha_u = m.alpha_v = p.float("alpha", 0.1)
             if min(m.alpha_u, m.alpha_v) <= 0:

@@ -6,7 +6,7 @@ from ..device.bsdf import Material
 from ..device.bump import Bump
 from ..device.camera import Camera
 from ..device.delta_lights import DeltaLight
-from ..device.scene_device import SceneDevice
+from ..device.scene_device import SceneDevice, vec6i
 from ..device.textures import (TEX_BITMAP, TEX_CHECKERBOARD, TEX_FILTER_BILINEAR, TEX_FILTER_NEAREST, TEX_WRAP_CLAMP,
                                TEX_WRAP_MIRROR, TEX_WRAP_REPEAT, Texture)
 from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONSTANT, ENV_MAP, ENV_NONE,
@@ -21,6 +21,7 @@ MATERIAL_KIND = {
     "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
     "dielectric": MAT_DIELECTRIC, "thindielectric": MAT_THINDIELECTRIC, "roughdielectric": MAT_ROUGHDIELECTRIC,
     "plastic": MAT_PLASTIC, "roughplastic": MAT_ROUGHPLASTIC,
+    "mixture": MAT_DIFFUSE,  # never evaluated: scene_device.material_index_at picks one of its two
 }
 FILTER_KIND = {"box": FILTER_BOX, "tent": FILTER_TENT, "gaussian": FILTER_GAUSSIAN}
 FILTER_TABLE_BINS = 256
@@ -46,6 +47,7 @@ def material_struct(m, device="cpu") -> Material:
     s.bumped = int(m.bump is not None)
     s.masked = int(m.masked)
     s.opacity = float(m.opacity)
+    s.roughness_remap = int(m.roughness_remap)
     table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
     s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
     return s
@@ -128,7 +130,10 @@ class DeviceScene:
         self._arrays.append(s.materials)
         s.material_textures = self._arr(np.array([[m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
                                                   for m in sc.materials], np.int32).reshape(-1, len(TEXTURED_PARAMETERS)),
-                                        wp.vec4i)
+                                        vec6i)
+        s.material_mix = self._arr(np.array([m.mix if m.mix is not None else (-1, -1) for m in sc.materials],
+                                            np.int32).reshape(-1, 2), wp.vec2i)
+        s.material_mix_amount = self._arr(np.array([m.mix_amount for m in sc.materials], np.float32), float)
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
 
         # one alias table over the emissive triangles, then the delta lights, by power

@@ -201,7 +201,7 @@ def test_materials_map_onto_restirs(tmp_path):
 
 
 @pytest.mark.parametrize("text,message", [
-    ('Material "mix" "string materials" [ "a" "b" ]\n', "material 'mix' is not supported yet"),
+    ('Material "mix" "string materials" [ "a" "b" ]\n', "unknown named material 'a'"),
     ('Material "diffuse" "texture reflectance" "nope"\n', "unknown texture 'nope'"),
     ('NamedMaterial "nope"\n', "unknown named material 'nope'"),
     ('LightSource "goniometric"\n', "LightSource 'goniometric' is not supported"),
@@ -225,3 +225,46 @@ def test_media_are_named_in_a_warning_and_interfaces_left_out(tmp_path):
     with pytest.warns(SceneWarning, match="participating medium 'fog' is not rendered"):
         scene = restir.load_scene(path)
     assert scene.num_triangles == 2  # the interface quad is not a surface
+
+
+# ----------------------------------------------------------------------------- mix and textured roughness
+SUN = 'LightSource "distant" "point3 from" [0 0 0] "point3 to" [0 0 1] "rgb L" [ 1 1 1 ]\n'
+RED_BLUE = ('MakeNamedMaterial "red" "string type" "diffuse" "rgb reflectance" [ 0.8 0 0 ]\n'
+            'MakeNamedMaterial "blue" "string type" "diffuse" "rgb reflectance" [ 0 0 0.8 ]\n')
+
+
+def test_mix_takes_the_second_material_with_probability_amount(tmp_path):
+    """pbrt-v4's mix picks one material per surface point by a hash; over a pixel's points the
+    image is the blend."""
+    path = write(tmp_path, CAMERA + FILM + "WorldBegin\n" + SUN + RED_BLUE
+                 + 'MakeNamedMaterial "m" "string type" "mix" "string materials" [ "red" "blue" ] "float amount" 0.25\n'
+                 'NamedMaterial "m"\n' + quad(-3, 3, -3, 3, 5))
+    img = render(path, spp=64).reshape(-1, 3).mean(axis=0)
+    assert np.allclose(img[[0, 2]] / (0.8 / math.pi), [0.75, 0.25], atol=0.01), img
+    assert img[1] == 0.0
+
+
+def test_mix_by_a_texture_chooses_where_it_says(tmp_path):
+    np.save(tmp_path / "amount.npy", np.repeat(np.array([[[0.0], [1.0]]], np.float32), 3, axis=2))  # left 0, right 1
+    path = write(tmp_path, CAMERA + FILM + "WorldBegin\n" + SUN + RED_BLUE
+                 + 'Texture "a" "float" "imagemap" "string filename" "amount.npy" "string filter" "point"\n'
+                 'MakeNamedMaterial "m" "string type" "mix" "string materials" [ "red" "blue" ] "texture amount" "a"\n'
+                 'NamedMaterial "m"\n' + quad(-3, 3, -3, 3, 5))
+    img = render(path, spp=1)
+    # u grows with world x, which the left-handed camera shows to the right
+    assert img[16, 3, 0] > 0.1 and img[16, 3, 2] == 0.0 and img[16, 28, 2] > 0.1 and img[16, 28, 0] == 0.0
+
+
+def test_a_textured_roughness_renders_as_the_same_constant(tmp_path):
+    np.save(tmp_path / "r.npy", np.full((2, 2, 3), 0.09, np.float32))
+    lit = (CAMERA + FILM + "WorldBegin\n" + 'LightSource "point" "point3 from" [ 0 0 0 ] "rgb I" [ 10 10 10 ]\n'
+           'Texture "r" "float" "imagemap" "string filename" "r.npy" "string encoding" "linear"\n')
+    common = '"string type" "conductor" "rgb eta" [ 0.2 0.9 1.1 ] "rgb k" [ 3 2.5 2 ]'
+    images = []
+    for name, rough in (("const.pbrt", '"float roughness" 0.09'), ("tex.pbrt", '"texture roughness" "r"')):
+        path = write(tmp_path, lit + f'MakeNamedMaterial "c" {common} {rough}\nNamedMaterial "c"\n'
+                     + quad(-3, 3, -3, 3, 5), name)
+        scene = restir.load_scene(path)
+        images.append(restir.render(scene, method="pt", spp=4, seed=2).image)
+    assert images[0].max() > 0.01
+    assert np.allclose(images[0], images[1], rtol=1e-5, atol=1e-7)

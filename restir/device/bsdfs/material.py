@@ -44,6 +44,9 @@ class Material:
     # texture drives it, resolved per hit by scene_device.textured_material.
     masked: int
     opacity: float
+    # A textured roughness (scene_device.textured_material): 1 when the texture holds pbrt-v4's
+    # roughness (alpha = sqrt), 0 when it holds alpha (Mitsuba 3's textured alpha)
+    roughness_remap: int
 
 
 @wp.struct

@@ -15,8 +15,8 @@ from ..errors import SceneError, warn
 from . import spectra
 from .params import ParamSet
 
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "interface")
-NOT_YET = ("coatedconductor", "diffusetransmission", "mix", "measured", "hair", "subsurface")
+MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "mix", "interface")
+NOT_YET = ("coatedconductor", "diffusetransmission", "measured", "hair", "subsurface")
 TEXTURES = ("imagemap", "checkerboard", "constant", "scale", "mix")
 SMOOTH_ALPHA = 1e-3
 
@@ -156,11 +156,15 @@ class Materials:
         return m
 
     # ------------------------------------------------------------------ materials
-    def material(self, kind: str, ps: ParamSet, key) -> dict | None:
-        """The BSDF object of a material (None for `interface`: the shape is left out)."""
+    def material(self, kind: str, ps: ParamSet, key, named=None) -> dict | None:
+        """The BSDF object of a material (None for `interface`: the shape is left out). `named`
+        resolves a `mix`'s material names: name -> its BSDF object."""
         if key is not None and ("mat", key) in self.cache:
             return self.cache[("mat", key)]
-        m = self._material(kind, ps)
+        if kind == "mix":
+            m = self._mix(ps, named)
+        else:
+            m = self._material(kind, ps)
         if key is not None:
             self.cache[("mat", key)] = m
         return m
@@ -188,6 +192,9 @@ class Materials:
             eta = self._eta(ps)
             if kind == "thindielectric":
                 b = {"type": "thindielectric", "int_ior": eta, "ext_ior": 1.0}
+            elif (textured := self._textured_alpha(ps)) is not None:
+                b = {"type": "roughdielectric", "int_ior": eta, "ext_ior": 1.0, "distribution": "ggx",
+                     "alpha": textured[0], "remap_roughness": textured[1]}
             else:
                 alpha = self._alpha(ps)
                 if alpha is None:
@@ -204,11 +211,36 @@ class Materials:
         ps.warn_unused()
         return b
 
+    def _mix(self, ps: ParamSet, named) -> dict:
+        """pbrt-v4's `mix`: each surface point takes the second material with probability
+        `amount`, which restir's `mixture` does (scene_device.material_index_at)."""
+        names = ps.strings("materials")
+        if names is None or len(names) != 2:
+            raise SceneError("mix needs 'string materials' with two material names", ps.loc)
+        bsdfs = [named(n, ps.loc_of("materials")) for n in names]
+        if any(b is None for b in bsdfs):
+            raise SceneError("mix: an 'interface' material cannot be mixed", ps.loc_of("materials"))
+        amount = self.value(ps, "amount", [0.5] * 3, "float")
+        ps.warn_unused()
+        return {"type": "mixture", "bsdf_a": bsdfs[0], "bsdf_b": bsdfs[1], "amount": amount, "_loc": ps.loc}
+
+    def _textured_alpha(self, ps: ParamSet):
+        """A textured `roughness` as restir's textured alpha (None when not textured)."""
+        for n in ("uroughness", "vroughness"):
+            if ps.texture(n) is not None:
+                raise SceneError(f"a textured '{n}' is not supported (a textured 'roughness' is)", ps.loc_of(n))
+        tname = ps.texture("roughness")
+        if tname is None:
+            return None
+        if ps.has("uroughness") or ps.has("vroughness"):
+            raise SceneError("a textured 'roughness' with 'uroughness' or 'vroughness' is not supported", ps.loc)
+        return self.texture(tname, "float", ps.loc_of("roughness")), ps.bool("remaproughness", True)
+
     def _alpha(self, ps: ParamSet, isotropic: bool = False):
         """(alpha_u, alpha_v) of pbrt-v4's roughness parameters, None when smooth."""
         for n in ("roughness", "uroughness", "vroughness"):
             if ps.texture(n) is not None:
-                raise SceneError(f"a textured '{n}' is not supported (give a number)", ps.loc_of(n))
+                raise SceneError(f"a textured '{n}' is not supported here (give a number)", ps.loc_of(n))
         r = ps.float("roughness", 0.0)
         ru, rv = ps.float("uroughness", r), ps.float("vroughness", r)
         if min(ru, rv) < 0:
@@ -248,8 +280,12 @@ class Materials:
             eta_s = ps.spectrum("eta") if ps.has("eta") else ("named", "metal-Cu-eta")
             k_s = ps.spectrum("k") if ps.has("k") else ("named", "metal-Cu-k")
             eta, k = spectra.conductor(eta_s, k_s, ps.loc_of("eta"), ps.loc_of("k"))
-        alpha = self._alpha(ps)
-        if alpha is None:
+        textured = self._textured_alpha(ps)
+        alpha = None if textured else self._alpha(ps)
+        if textured:
+            b = {"type": "roughconductor", "distribution": "ggx", "alpha": textured[0], "remap_roughness": textured[1],
+                 "eta": eta, "k": k}
+        elif alpha is None:
             b = {"type": "conductor", "eta": eta, "k": k}
         else:
             b = {"type": "roughconductor", "distribution": "ggx", "alpha_u": alpha[0], "alpha_v": alpha[1],

@@ -405,6 +405,12 @@ class PbrtReader:
         self.world("NamedMaterial", loc)
         self.state.material = ("named", self.string_arg("NamedMaterial", loc), loc)
 
+    def named_material(self, name: str, loc: str) -> dict | None:
+        if name not in self.named_materials:
+            raise SceneError(f"unknown named material '{name}'", loc)
+        kind, ps = self.named_materials[name]
+        return self.materials.material(kind, ps, ("named", name), self.named_material)
+
     def current_material(self) -> dict | None:
         m = self.state.material
         if m is None:
@@ -417,7 +423,7 @@ class PbrtReader:
         else:
             kind, ps = m[1], m[2]
             key = ("anon", id(ps))
-        return self.materials.material(kind, ps, key)
+        return self.materials.material(kind, ps, key, self.named_material)
 
     def d_LightSource(self, loc):
         self.world("LightSource", loc)
