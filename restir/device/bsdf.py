@@ -11,10 +11,12 @@ vectors are in, and eval takes the bump map's factor here, after the kind's valu
 (Mitsuba 3's `mask`) is the blend opacity * (the kind) + (1 - opacity) * (the null lobe, straight
 through): eval and pdf take the factor opacity here, and `bsdf_sample` picks the null lobe.
 
-Adding a material kind: a module in bsdfs/ with its eval, pdf, sample and LOBES, one line in
-each of `kind_eval`, `kind_pdf`, `kind_sample`, `kind_lobes` and, if it has a non-delta lobe,
-`smooth_lobe`; its MAT_* constant in types.py, and its parameters in the
-loader (scene.py; a spectrum read with `spectrum()` is texturable with no device change).
+Adding a material kind: a module in bsdfs/ with its eval, pdf, sample and LOBES, its line in
+bsdfs/registry.py, and the branches that table asks for here (`kind_eval`, `kind_pdf`,
+`kind_sample`, `kind_lobes`, and `smooth_lobe` or the `*_parts` calls of `bsdf_eval_lobes` and
+`bsdf_pdf_lobes`; tests/unit/test_bsdf_registry.py checks them); its MAT_* constant in types.py,
+and its parameters in the loader (scene.py; a spectrum read with `spectrum()` is texturable with
+no device change).
 
 Lobes (types.py LOBE_*): every sample reports the lobe it chose; `bsdf_eval_lobes` and
 `bsdf_pdf_lobes` restrict eval and pdf to a mask of lobes (the pdf including the probability of
@@ -29,6 +31,8 @@ from .bsdfs.conductor import CONDUCTOR_LOBES, ROUGHCONDUCTOR_LOBES, conductor_sa
 from .bsdfs.dielectric import (DIELECTRIC_LOBES, ROUGHDIELECTRIC_LOBES, dielectric_sample, roughdielectric_eval,
                                roughdielectric_pdf, roughdielectric_sample, thindielectric_sample)
 from .bsdfs.diffuse import DIFFUSE_LOBES, diffuse_eval, diffuse_pdf, diffuse_sample
+from .bsdfs.metallic_roughness import (METALLIC_ROUGHNESS_LOBES, metallic_roughness_eval, metallic_roughness_eval_parts,
+                                       metallic_roughness_pdf, metallic_roughness_pdf_parts, metallic_roughness_sample)
 from .bsdfs.material import BSDFSample, Material, flip_z, invalid_sample, null_sample  # noqa: F401  (the BSDF interface)
 from .bsdfs.plastic import (PLASTIC_LOBES, ROUGHPLASTIC_LOBES, plastic_eval, plastic_pdf, plastic_sample,
                             roughplastic_eval, roughplastic_pdf, roughplastic_pdf_parts, roughplastic_eval_parts,
@@ -45,6 +49,7 @@ from .types import (
     MAT_CONDUCTOR,
     MAT_DIELECTRIC,
     MAT_DIFFUSE,
+    MAT_METALLIC_ROUGHNESS,
     MAT_PLASTIC,
     MAT_ROUGHCONDUCTOR,
     MAT_ROUGHPLASTIC,
@@ -90,6 +95,8 @@ def kind_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
         return plastic_eval(mat, wi, wo)
     if mat.kind == MAT_ROUGHPLASTIC:
         return roughplastic_eval(mat, wi, wo)
+    if mat.kind == MAT_METALLIC_ROUGHNESS:
+        return metallic_roughness_eval(mat, wi, wo)
     return wp.vec3(0.0)  # delta-only kinds
 
 
@@ -110,6 +117,8 @@ def kind_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
         return plastic_pdf(mat, wi, wo)
     if mat.kind == MAT_ROUGHPLASTIC:
         return roughplastic_pdf(mat, wi, wo)
+    if mat.kind == MAT_METALLIC_ROUGHNESS:
+        return metallic_roughness_pdf(mat, wi, wo)
     return 0.0  # delta-only kinds
 
 
@@ -152,6 +161,8 @@ def kind_sample(mat: Material, wi: wp.vec3, u_lobe: float, u: wp.vec2) -> BSDFSa
         return plastic_sample(mat, wi, u_lobe, u)
     if mat.kind == MAT_ROUGHPLASTIC:
         return roughplastic_sample(mat, wi, u_lobe, u)
+    if mat.kind == MAT_METALLIC_ROUGHNESS:
+        return metallic_roughness_sample(mat, wi, u_lobe, u)
     return invalid_sample()
 
 
@@ -217,6 +228,8 @@ def kind_lobes(mat: Material) -> int:
         return PLASTIC_LOBES
     if mat.kind == MAT_ROUGHPLASTIC:
         return ROUGHPLASTIC_LOBES
+    if mat.kind == MAT_METALLIC_ROUGHNESS:
+        return METALLIC_ROUGHNESS_LOBES
     return 0
 
 
@@ -231,7 +244,8 @@ def bsdf_is_delta_only(mat: Material) -> int:
 @wp.func
 def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
     """The one non-delta lobe that can scatter wi into wo, for materials with at most one such
-    lobe on each side (all but roughplastic); 0 for delta-only materials."""
+    lobe on each side (all but those with `parts` in bsdfs/registry.py); 0 for delta-only
+    materials."""
     if mat.kind == MAT_DIFFUSE or mat.kind == MAT_PLASTIC:
         return LOBE_DIFFUSE_REFLECTION
     if mat.kind == MAT_ROUGHCONDUCTOR:
@@ -241,11 +255,25 @@ def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
     return 0
 
 
+@wp.func
+def has_lobe_parts(mat: Material) -> bool:
+    """The material has several non-delta lobes on a side (`parts` in bsdfs/registry.py): its
+    lobe-restricted eval and pdf differ from the full ones."""
+    return mat.kind == MAT_ROUGHPLASTIC or mat.kind == MAT_METALLIC_ROUGHNESS
+
+
 @wp.func(inline=False)
 def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
     """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
-    if mat.kind == MAT_ROUGHPLASTIC:
-        f = roughplastic_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes) * mat.opacity
+    if has_lobe_parts(mat):
+        wi = to_front(mat, wi_in, wi_in)
+        wo = to_front(mat, wi_in, wo_in)
+        f = wp.vec3(0.0)
+        if mat.kind == MAT_ROUGHPLASTIC:
+            f = roughplastic_eval_parts(mat, wi, wo, lobes)
+        else:
+            f = metallic_roughness_eval_parts(mat, wi, wo, lobes)
+        f = f * mat.opacity
         if mat.bumped != 0:
             f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo_in)
         return f
@@ -258,8 +286,15 @@ def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -
 def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> float:
     """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
     sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
-    if mat.kind == MAT_ROUGHPLASTIC:
-        p = roughplastic_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes) * mat.opacity
+    if has_lobe_parts(mat):
+        wi = to_front(mat, wi_in, wi_in)
+        wo = to_front(mat, wi_in, wo_in)
+        p = 0.0
+        if mat.kind == MAT_ROUGHPLASTIC:
+            p = roughplastic_pdf_parts(mat, wi, wo, lobes)
+        else:
+            p = metallic_roughness_pdf_parts(mat, wi, wo, lobes)
+        p = p * mat.opacity
         if mat.bumped != 0:
             if bump_factor(mat.bump_n0, 0.0, wo_in) == 0.0:
                 p = 0.0

@@ -10,8 +10,9 @@ from .bump import Bump
 from .delta_lights import DeltaLight
 from .rng import hash_combine, hash_u32, u32_to_unit_float
 from .textures import Texture, scalar_of, texture_eval
+from .types import ROUGHNESS_SQRT, ROUGHNESS_SQUARED
 
-vec6i = wp.types.vector(length=6, dtype=wp.int32)
+vec8i = wp.types.vector(length=8, dtype=wp.int32)
 # below this GGX alpha a textured roughness is held (pbrt-v4 would switch to a smooth lobe there)
 MIN_TEXTURED_ALPHA = wp.constant(1.0e-4)
 
@@ -31,9 +32,9 @@ class SceneDevice:
     tri_light_pdf: wp.array(dtype=float)   # P(select triangle) / area: NEE density in area measure
     materials: wp.array(dtype=Material)
     # per material, the texture index of reflectance, specular_reflectance, specular_transmittance,
-    # opacity, roughness, mixture amount (scene.py TEXTURED_PARAMETERS, in that order); -1: the
-    # material's constant holds
-    material_textures: wp.array(dtype=vec6i)
+    # opacity, roughness, mixture amount, metallic (scene.py TEXTURED_PARAMETERS, in that order;
+    # the eighth is unused); -1: the material's constant holds
+    material_textures: wp.array(dtype=vec8i)
     # per material: a mixture's two materials (-1, -1 for any other) and its constant amount
     material_mix: wp.array(dtype=wp.vec2i)
     material_mix_amount: wp.array(dtype=float)
@@ -116,10 +117,14 @@ def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     m.specular_transmittance = texture_or_constant(scene, tex[2], uv, m.specular_transmittance)
     if tex[3] >= 0:  # a mask's opacity: the texture's eval_1, clipped to [0, 1] as in Mitsuba
         m.opacity = wp.clamp(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[3], uv)), 0.0, 1.0)
-    if tex[4] >= 0:  # an isotropic roughness: alpha, or pbrt-v4's roughness whose sqrt is alpha
+    if tex[4] >= 0:  # an isotropic roughness: alpha, pbrt-v4's roughness (sqrt) or glTF's (square)
         r = wp.max(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[4], uv)), 0.0)
-        if m.roughness_remap != 0:
+        if m.roughness_remap == ROUGHNESS_SQRT:
             r = wp.sqrt(r)
+        elif m.roughness_remap == ROUGHNESS_SQUARED:
+            r = r * r
         m.alpha_u = wp.max(r, MIN_TEXTURED_ALPHA)
         m.alpha_v = m.alpha_u
+    if tex[6] >= 0:  # glTF's metallic
+        m.metallic = wp.clamp(scalar_of(texture_lookup(scene.textures, scene.tex_pixels, tex[6], uv)), 0.0, 1.0)
     return m

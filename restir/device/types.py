@@ -1,7 +1,7 @@
 """Named tags shared by host and device code (never bare integers in kernels)."""
 import warp as wp
 
-# Material kinds (one per Mitsuba BSDF plugin we support; `twosided` is a flag, not a kind).
+# Material kinds (bsdfs/registry.py lists them with their modules; `twosided` is a flag, not a kind).
 MAT_DIFFUSE = wp.constant(0)
 MAT_CONDUCTOR = wp.constant(1)
 MAT_ROUGHCONDUCTOR = wp.constant(2)
@@ -10,6 +10,12 @@ MAT_THINDIELECTRIC = wp.constant(4)
 MAT_ROUGHDIELECTRIC = wp.constant(5)
 MAT_PLASTIC = wp.constant(6)
 MAT_ROUGHPLASTIC = wp.constant(7)
+MAT_METALLIC_ROUGHNESS = wp.constant(8)  # glTF 2.0's (not a Mitsuba plugin: restir's `metallic_roughness`)
+
+# How a textured roughness becomes a microfacet alpha (Material.roughness_remap).
+ROUGHNESS_IS_ALPHA = wp.constant(0)   # Mitsuba 3's textured alpha
+ROUGHNESS_SQRT = wp.constant(1)       # pbrt-v4's remapped roughness: alpha = sqrt(r)
+ROUGHNESS_SQUARED = wp.constant(2)    # glTF's perceptual roughness: alpha = r^2
 
 # Microfacet distributions.
 MICROFACET_BECKMANN = wp.constant(0)

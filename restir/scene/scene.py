@@ -44,7 +44,7 @@ IOR_TABLE = {
 # `material_desc`, a mixture's amount in `mixture()`; the device resolves them in
 # `scene_device.textured_material` and `material_index_at`.
 TEXTURED_SPECTRA = ("reflectance", "specular_reflectance", "specular_transmittance")
-TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity", "roughness", "amount")
+TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity", "roughness", "amount", "metallic")
 
 
 @dataclass
@@ -77,7 +77,8 @@ class MaterialDesc:
     bump: BumpDesc | None = None
     masked: bool = False       # Mitsuba 3's `mask` around the material (bsdf.py: the null lobe)
     opacity: float = 1.0       # its constant opacity (textured: textures["opacity"])
-    roughness_remap: bool = False  # a textured roughness holds pbrt-v4's roughness (alpha = sqrt), not alpha
+    roughness_remap: int = 0   # a textured roughness: alpha (0), pbrt-v4's (1: alpha = sqrt) or glTF's (2: r^2)
+    metallic: float = 0.0      # metallic_roughness (glTF): the metal fraction (textured: textures["metallic"])
     mix: tuple[int, int] | None = None  # a mixture (pbrt-v4's `mix`): its two materials' indices
     mix_amount: float = 0.0    # the probability of the second (textured: textures["amount"])
 
@@ -577,7 +578,7 @@ class _Builder:
                 m.alpha_u, m.alpha_v = p.float("alpha_u"), p.float("alpha_v")
             elif isinstance(alpha, dict):  # textured (Mitsuba 3's texturable alpha; pbrt-v4's roughness)
                 m.textures["roughness"] = self.texture(alpha)
-                m.roughness_remap = p.bool("remap_roughness", False)
+                m.roughness_remap = 1 if p.bool("remap_roughness", False) else 0
                 m.alpha_u = m.alpha_v = 0.1  # replaced at every hit
             else:
                 m.alpha_u = m.alpha_v = p.float("alpha", 0.1)

@@ -3,10 +3,11 @@ import numpy as np
 import warp as wp
 
 from ..device.bsdf import Material
+from ..device.bsdfs.registry import MATERIAL_KINDS
 from ..device.bump import Bump
 from ..device.camera import Camera
 from ..device.delta_lights import DeltaLight
-from ..device.scene_device import SceneDevice, vec6i
+from ..device.scene_device import SceneDevice, vec8i
 from ..device.textures import (TEX_BITMAP, TEX_CHECKERBOARD, TEX_FILTER_BILINEAR, TEX_FILTER_NEAREST, TEX_WRAP_CLAMP,
                                TEX_WRAP_MIRROR, TEX_WRAP_REPEAT, Texture)
 from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONSTANT, ENV_MAP, ENV_NONE,
@@ -17,12 +18,8 @@ from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONS
 from .light_tables import alias_table, cdf_1d, env_tables
 from .scene import TEXTURED_PARAMETERS, Scene
 
-MATERIAL_KIND = {
-    "diffuse": MAT_DIFFUSE, "conductor": MAT_CONDUCTOR, "roughconductor": MAT_ROUGHCONDUCTOR,
-    "dielectric": MAT_DIELECTRIC, "thindielectric": MAT_THINDIELECTRIC, "roughdielectric": MAT_ROUGHDIELECTRIC,
-    "plastic": MAT_PLASTIC, "roughplastic": MAT_ROUGHPLASTIC,
-    "mixture": MAT_DIFFUSE,  # never evaluated: scene_device.material_index_at picks one of its two
-}
+MATERIAL_KIND = {k.name: k.kind for k in MATERIAL_KINDS}
+MATERIAL_KIND["mixture"] = MAT_DIFFUSE  # never evaluated: scene_device.material_index_at picks one of its two
 FILTER_KIND = {"box": FILTER_BOX, "tent": FILTER_TENT, "gaussian": FILTER_GAUSSIAN}
 FILTER_TABLE_BINS = 256
 
@@ -48,6 +45,7 @@ def material_struct(m, device="cpu") -> Material:
     s.masked = int(m.masked)
     s.opacity = float(m.opacity)
     s.roughness_remap = int(m.roughness_remap)
+    s.metallic = float(m.metallic)
     table = m.coat_transmittance if m.coat_transmittance is not None else np.ones(2)
     s.coat_transmittance = wp.array(np.asarray(table, np.float32), dtype=float, device=device)
     return s
@@ -128,9 +126,10 @@ class DeviceScene:
         self._arrays += [ms.coat_transmittance for ms in structs]
         s.materials = wp.array(structs, dtype=Material, device=self.device)
         self._arrays.append(s.materials)
-        s.material_textures = self._arr(np.array([[m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
-                                                  for m in sc.materials], np.int32).reshape(-1, len(TEXTURED_PARAMETERS)),
-                                        vec6i)
+        slots = np.full((len(sc.materials), 8), -1, np.int32)
+        for i, m in enumerate(sc.materials):
+            slots[i, :len(TEXTURED_PARAMETERS)] = [m.textures.get(p, -1) for p in TEXTURED_PARAMETERS]
+        s.material_textures = self._arr(slots, vec8i)
         s.material_mix = self._arr(np.array([m.mix if m.mix is not None else (-1, -1) for m in sc.materials],
                                             np.int32).reshape(-1, 2), wp.vec2i)
         s.material_mix_amount = self._arr(np.array([m.mix_amount for m in sc.materials], np.float32), float)

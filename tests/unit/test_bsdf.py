@@ -10,7 +10,7 @@ import warp as wp
 from restir.device.bsdf import Material, bsdf_eval, bsdf_pdf, bsdf_sample
 from restir.device.fresnel import fresnel_conductor, fresnel_dielectric
 from restir.device.rng import rng_key, rng_uniform, rng_uniform2
-from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_ROUGHCONDUCTOR,
+from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_METALLIC_ROUGHNESS, MAT_ROUGHCONDUCTOR,
                                  MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
                                  MICROFACET_GGX)
 from restir.validation.stats import chi2_test, expected_counts, histogram_directions, integration_points
@@ -24,7 +24,7 @@ _ONES = wp.array(np.ones(2, np.float32), dtype=float, device="cpu")
 _KEEP = []
 
 
-def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
+def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0, metallic=0.0):
     m = Material()
     m.kind = int(kind)
     m.twosided = twosided
@@ -40,6 +40,7 @@ def material(kind, alpha=(0.1, 0.1), dist=MICROFACET_GGX, ior=1.5, twosided=0):
     m.fdr_int = 0.6
     m.nonlinear = 0
     m.opacity = 1.0  # unmasked (upload.material_struct's default)
+    m.metallic = metallic
     if kind == MAT_ROUGHPLASTIC:
         from restir.scene.coat_tables import roughplastic_tables
 
@@ -122,6 +123,11 @@ SMOOTH_CASES = [
     ("plastic-grazing", material(MAT_PLASTIC, ior=1.49), direction(85)),
     ("roughplastic-ggx", material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), direction(40)),
     ("roughplastic-beckmann-grazing", material(MAT_ROUGHPLASTIC, (0.3, 0.3), MICROFACET_BECKMANN, ior=1.49), direction(80)),
+    ("metallic-roughness-dielectric", material(MAT_METALLIC_ROUGHNESS, (0.2, 0.2)), direction(40)),
+    ("metallic-roughness-half", material(MAT_METALLIC_ROUGHNESS, (0.35, 0.35), metallic=0.5), direction(70)),
+    ("metallic-roughness-metal", material(MAT_METALLIC_ROUGHNESS, (0.15, 0.15), metallic=1.0), direction(20)),
+    ("metallic-roughness-twosided-back", material(MAT_METALLIC_ROUGHNESS, (0.3, 0.3), twosided=1, metallic=0.3),
+     direction(50, below=True)),
     # bump-mapped (the tilted frame's zero region and the shadowing term; wo with phi = 180 deg
     # from the tilt falls between the two surfaces first)
     ("bumped-diffuse", bumped(material(MAT_DIFFUSE), 35), direction(40)),

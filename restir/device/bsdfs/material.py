@@ -44,9 +44,11 @@ class Material:
     # texture drives it, resolved per hit by scene_device.textured_material.
     masked: int
     opacity: float
-    # A textured roughness (scene_device.textured_material): 1 when the texture holds pbrt-v4's
-    # roughness (alpha = sqrt), 0 when it holds alpha (Mitsuba 3's textured alpha)
+    # A textured roughness (scene_device.textured_material): ROUGHNESS_IS_ALPHA (Mitsuba 3's
+    # textured alpha), ROUGHNESS_SQRT (pbrt-v4's roughness, alpha = sqrt) or ROUGHNESS_SQUARED
+    # (glTF's, alpha = roughness^2)
     roughness_remap: int
+    metallic: float            # glTF's metallic-roughness: the metal fraction (textured: per hit)
 
 
 @wp.struct

@@ -14,13 +14,13 @@ shift is a bijection only when both sides pick the same index
 
 Lobe-separated path BSDF (docs/theory/restir_pt.md#the-lobe-separated-path-bsdf): a path's
 throughput at a vertex is the sampled lobe's f / p (p including the lobe-selection probability); MIS
-weights use the all-lobe pdf. Only roughplastic has two smooth lobes; for every other material the
-two coincide.
+weights use the all-lobe pdf. Only the materials with `parts` in device/bsdfs/registry.py
+(roughplastic, metallic_roughness) have two smooth lobes; for every other material the two coincide.
 """
 import warp as wp
 
-from ...device.bsdf import BSDFSample, Material, bsdf_eval_lobes, bsdf_has_rough_component, bsdf_pdf_lobes, lobe_is_rough
-from ...device.types import MAT_ROUGHPLASTIC
+from ...device.bsdf import (BSDFSample, Material, bsdf_eval_lobes, bsdf_has_rough_component, bsdf_pdf_lobes,
+                            has_lobe_parts, lobe_is_rough)
 from .params import SHIFT_HYBRID, SHIFT_RECONNECTION, PathReuseParams
 
 
@@ -61,7 +61,7 @@ def qualifies_escape_vertex(params: PathReuseParams, k: int, dist: float, lobe_r
 def lobe_weight(mat: Material, wi: wp.vec3, bs: BSDFSample) -> wp.vec3:
     """Throughput of a sampled bounce under the lobe-separated path BSDF: f_l / p_l of the lobe l
     the sample chose (the sample's own weight where the material has one smooth lobe)."""
-    if bs.is_delta != 0 or mat.kind != MAT_ROUGHPLASTIC:
+    if bs.is_delta != 0 or not has_lobe_parts(mat):
         return bs.weight
     p = bsdf_pdf_lobes(mat, wi, bs.wo, bs.lobe)
     if p <= 0.0:
@@ -72,7 +72,7 @@ def lobe_weight(mat: Material, wi: wp.vec3, bs: BSDFSample) -> wp.vec3:
 @wp.func
 def lobe_pdf(mat: Material, wi: wp.vec3, bs: BSDFSample) -> float:
     """p_l of a sampled bounce: the density of choosing its lobe and then its direction."""
-    if bs.is_delta != 0 or mat.kind != MAT_ROUGHPLASTIC:
+    if bs.is_delta != 0 or not has_lobe_parts(mat):
         return bs.pdf
     return bsdf_pdf_lobes(mat, wi, bs.wo, bs.lobe)
 
