@@ -52,6 +52,7 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
     - `builtin:NAME`: keyword arguments go to the builtin (`width=`, `height=`, `spp=`, ...;
       `restir render --help` lists the builtins).
     - a pbrt-v4 file (`.pbrt`; docs/guide/pbrt.md says what is read, refused and approximated).
+    - a glTF 2.0 file (`.gltf`, `.glb`; docs/guide/gltf.md); `camera="NAME"` picks a camera node.
     - a dict: a scene in `mi.load_dict`'s form ({"type": "scene", "sensor": {...}, ...}).
 
     `missing_textures="grey"` renders a bitmap whose file is missing as constant grey (0.5), with
@@ -79,6 +80,14 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
                     raise SceneError(f"unknown parameter(s) {', '.join(unknown)} (builtin:{name} takes "
                                      f"{', '.join(accepted)})", spec)
         return build_scene(builtin_scene(name, **params), name, missing_textures, progress)
+    if spec.lower().endswith((".gltf", ".glb")):
+        options = {**(defines or {}), **params}
+        unknown = sorted(set(options) - {"camera"})
+        if unknown:
+            raise SceneError(f"unknown parameter(s) {', '.join(unknown)} for a glTF file (it takes camera=NAME)", spec)
+        from .scene.gltf.reader import load_gltf
+
+        return build_scene(load_gltf(spec, options.get("camera")), spec, missing_textures, progress)
     if spec.lower().endswith(".pbrt"):
         if defines or params:
             raise SceneError("parameters (-D, keywords) apply to Mitsuba XML files and builtins, not to pbrt-v4 files",

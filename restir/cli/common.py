@@ -93,7 +93,7 @@ def builtins_epilog() -> str:
     return "\n".join(lines)
 
 
-def scene_argument(p, help="Mitsuba 3 XML file, pbrt-v4 file (.pbrt) or builtin:NAME (listed below)", **kw) -> None:
+def scene_argument(p, help="Mitsuba 3 XML file, pbrt-v4 file (.pbrt), glTF 2.0 file (.gltf, .glb) or builtin:NAME (listed below)", **kw) -> None:
     p.add_argument("scene", help=help, **kw)
 
 

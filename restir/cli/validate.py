@@ -15,7 +15,7 @@ VERDICT_STATUS = {"pass": 0, "fail": 1, "inconclusive": 3}
 
 def add_parser(sub) -> None:
     v = add_command(sub, "validate", "test a method for bias against the path tracer (independent runs, z-tests)")
-    scene_argument(v, nargs="?", help="Mitsuba 3 XML file, pbrt-v4 file (.pbrt) or builtin:NAME (listed below); not needed when "
+    scene_argument(v, nargs="?", help="Mitsuba 3 XML file, pbrt-v4 file (.pbrt), glTF 2.0 file (.gltf, .glb) or builtin:NAME (listed below); not needed when "
                    "--images are tested against --reference images")
     v.add_argument("--method", default="restir-di", help="the method tested")
     v.add_argument("--images", metavar="GLOB", type=path_argument,

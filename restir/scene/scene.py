@@ -15,7 +15,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided", "bumpmap", "mask", "mixture"},
+             "roughplastic", "twosided", "bumpmap", "mask", "mixture", "metallic_roughness"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh", "triangles"},
     "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
     "sensor": {"perspective", "thinlens"},
@@ -253,7 +253,8 @@ class _Builder:
         uvs = np.concatenate([p[2] for p in self.parts]).astype(np.float32)
         smooth = np.concatenate([np.full(len(p[0]), p[3], np.int32) for p in self.parts])
         mat = np.concatenate([np.full(len(p[0]), p[4], np.int32) for p in self.parts])
-        emis = np.concatenate([np.tile(p[5], (len(p[0]), 1)) for p in self.parts]).astype(np.float32)
+        emis = np.concatenate([p[5] if np.ndim(p[5]) == 2 else np.tile(p[5], (len(p[0]), 1))
+                               for p in self.parts]).astype(np.float32)
         env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
         return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
                      self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
@@ -527,6 +528,21 @@ class _Builder:
                              "(as Bitterli's scenes do)", p.loc)
         if t == "diffuse":
             self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))
+        if t == "metallic_roughness":  # restir's: glTF 2.0's material (device/bsdfs/metallic_roughness.py)
+            self.spectrum(p, m, "base_color", "reflectance", np.ones(3))
+            m.distribution = "ggx"
+            for name in ("metallic", "roughness"):
+                v = p.color_or_texture(name, np.ones(3))
+                if isinstance(v, dict):
+                    m.textures[name] = self.texture(v)
+                    v = np.ones(3)
+                elif not (np.all(v == v[0]) and 0.0 <= v[0] <= 1.0):
+                    raise SceneError(f"metallic_roughness: {name} is one number in [0, 1]", p._loc_of(name))
+                if name == "metallic":
+                    m.metallic = float(v[0])
+                else:  # alpha = roughness^2 (glTF's), at least 1e-4 as every microfacet material here
+                    m.alpha_u = m.alpha_v = max(float(v[0]) ** 2, 1e-4)
+                    m.roughness_remap = 2
         if t in ("conductor", "roughconductor"):
             material = p.string("material", "none")
             if p.has("eta") or material == "none":
@@ -615,6 +631,13 @@ class _Builder:
         if p.type == "checkerboard":
             t = TextureDesc("checkerboard", to_uv, color0=p.rgb("color0", np.full(3, 0.4)),
                             color1=p.rgb("color1", np.full(3, 0.2)))
+        elif p.has("data"):  # restir extension for other formats' loaders: texels decoded already (linear RGB)
+            p.queried.add("data")
+            img = np.ascontiguousarray(np.asarray(p.obj["data"], np.float32))
+            if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] < 1 or img.shape[1] < 1 or not np.all(np.isfinite(img)):
+                raise SceneError("a texture's data must be finite H x W x 3 texels", p.loc)
+            t = TextureDesc("bitmap", to_uv, img, filter=self.choice(p, "filter_type", "bilinear", FILTERS),
+                            wrap=self.choice(p, "wrap_mode", "repeat", WRAPS))
         else:
             fname = p.string("filename")
             path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
@@ -752,6 +775,8 @@ class _Builder:
         area = 0.5 * np.linalg.norm(np.cross(pos[:, 1] - pos[:, 0], pos[:, 2] - pos[:, 0]), axis=1)
         keep = area > 0
         pos, nrm, uvs = pos[keep], nrm[keep], uvs[keep]
+        if mesh.emission is not None and emitter_obj is not None:  # per-triangle radiance (a triangles shape's)
+            emission = np.asarray(mesh.emission, np.float64)[keep]
         p.warn_unqueried()
         if len(pos):
             self.parts.append((pos, nrm, uvs, smooth, mat, emission))

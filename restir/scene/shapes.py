@@ -20,6 +20,7 @@ class TriMesh:
     positions: np.ndarray
     normals: np.ndarray | None
     uvs: np.ndarray
+    emission: np.ndarray | None = None  # (T, 3) per-triangle radiance, replacing the emitter's (glTF's textures)
 
 
 def barycentric_uvs(num_triangles: int) -> np.ndarray:

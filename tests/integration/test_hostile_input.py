@@ -80,6 +80,14 @@ SCENES = [
     ("pbrt_shape_before_world.pbrt", "pbrt_shape_before_world.pbrt:2", "Shape must come after WorldBegin"),
     ("pbrt_material_not_yet.pbrt", "pbrt_material_not_yet.pbrt:5", "material 'coatedconductor' is not supported"),
     ("pbrt_binary.pbrt", "pbrt_binary.pbrt", "not a text file (byte 1 is not UTF-8)"),
+    # glTF 2.0 files (written by tests/gltf_files.py, then broken; glTF has no lines to name)
+    ("gltf_accessor_past_view.gltf", "gltf_accessor_past_view.gltf", "accessor 0 reaches past the end of its bufferView"),
+    ("gltf_draco_required.gltf", "gltf_draco_required.gltf",
+     "the file requires the extension 'KHR_draco_mesh_compression'"),
+    ("gltf_index_out_of_range.gltf", "gltf_index_out_of_range.gltf", "an index refers to vertex 7, but there are 3"),
+    ("gltf_nan_position.gltf", "gltf_nan_position.gltf", "accessor 0 holds a value that is not finite"),
+    ("gltf_node_cycle.gltf", "gltf_node_cycle.gltf", "node 0 is reached twice"),
+    ("gltf_truncated.glb", "gltf_truncated.glb", "not a readable glTF file"),
 ]
 
 # (reference image in tests/data/hostile for restir compare --reference, the refusal's text)

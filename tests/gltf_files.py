@@ -1,0 +1,97 @@
+"""glTF 2.0 files for the tests, written with pygltflib: meshes given as vertices and faces (each
+its own node, optionally under a matrix), metallic-roughness materials as the specification's
+JSON, a perspective camera and KHR_lights_punctual lights."""
+import math
+
+import numpy as np
+import pygltflib as g
+
+
+def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_required=(), images=()):
+    """meshes: [(vertices (N, 3), faces (M, 3), material index or None, extras)] where extras may
+    hold "normals", "uvs" (N, 2), "matrix" (4x4, node transform); materials: [dict of glTF JSON];
+    camera: (world matrix of the camera node (looks down -Z), yfov radians, aspect, name);
+    lights: [(light JSON, world matrix of its node)]; images: [PNG bytes]."""
+    blob = bytearray()
+    views, accessors = [], []
+
+    def add(array, kind, target=None, component=g.FLOAT):
+        a = np.ascontiguousarray(array, np.uint32 if component == g.UNSIGNED_INT else np.float32)
+        while len(blob) % 4:
+            blob.append(0)
+        views.append(g.BufferView(buffer=0, byteOffset=len(blob), byteLength=a.nbytes, target=target))
+        blob.extend(a.tobytes())
+        acc = g.Accessor(bufferView=len(views) - 1, componentType=component, count=len(a), type=kind)
+        if kind == g.VEC3 and np.all(np.isfinite(a)):
+            acc.min, acc.max = a.min(0).tolist(), a.max(0).tolist()
+        accessors.append(acc)
+        return len(accessors) - 1
+
+    nodes, gl_meshes = [], []
+    for verts, faces, mat, extras in meshes:
+        attrs = g.Attributes(POSITION=add(verts, g.VEC3, g.ARRAY_BUFFER))
+        if "normals" in extras:
+            attrs.NORMAL = add(extras["normals"], g.VEC3, g.ARRAY_BUFFER)
+        if "uvs" in extras:
+            attrs.TEXCOORD_0 = add(extras["uvs"], g.VEC2, g.ARRAY_BUFFER)
+        idx = add(np.asarray(faces).reshape(-1), g.SCALAR, g.ELEMENT_ARRAY_BUFFER, g.UNSIGNED_INT)
+        gl_meshes.append(g.Mesh(primitives=[g.Primitive(attributes=attrs, indices=idx, material=mat)]))
+        node = g.Node(mesh=len(gl_meshes) - 1)
+        if "matrix" in extras:
+            node.matrix = np.asarray(extras["matrix"], float).T.reshape(-1).tolist()
+        nodes.append(node)
+    cameras = []
+    if camera is not None:
+        m, yfov, aspect, name = camera
+        cameras.append(g.Camera(type="perspective", perspective=g.Perspective(yfov=yfov, aspectRatio=aspect, znear=0.01)))
+        nodes.append(g.Node(name=name, camera=0, matrix=np.asarray(m, float).T.reshape(-1).tolist()))
+    used = list(extensions_required)
+    extensions = {}
+    if lights:
+        extensions["KHR_lights_punctual"] = {"lights": [lt for lt, _ in lights]}
+        used.append("KHR_lights_punctual")
+        for i, (_, m) in enumerate(lights):
+            nodes.append(g.Node(matrix=np.asarray(m, float).T.reshape(-1).tolist(),
+                                extensions={"KHR_lights_punctual": {"light": i}}))
+    gl_images, textures = [], []
+    for png in images:
+        while len(blob) % 4:
+            blob.append(0)
+        views.append(g.BufferView(buffer=0, byteOffset=len(blob), byteLength=len(png)))
+        blob.extend(png)
+        gl_images.append(g.Image(bufferView=len(views) - 1, mimeType="image/png"))
+        textures.append(g.Texture(source=len(gl_images) - 1, sampler=0))
+    mats = [g.Material(**_material(m)) for m in materials]
+    doc = g.GLTF2(scene=0, scenes=[g.Scene(nodes=list(range(len(nodes))))], nodes=nodes, meshes=gl_meshes,
+                  accessors=accessors, bufferViews=views, buffers=[g.Buffer(byteLength=len(blob))], materials=mats,
+                  cameras=cameras, extensions=extensions, extensionsUsed=sorted(set(used)),
+                  extensionsRequired=list(extensions_required), images=gl_images, textures=textures,
+                  samplers=[g.Sampler(magFilter=9728, minFilter=9728)] if images else [])
+    doc.set_binary_blob(bytes(blob))
+    if str(path).endswith(".glb"):
+        doc.save_binary(str(path))
+    else:
+        doc.convert_buffers(g.BufferFormat.DATAURI)
+        doc.save_json(str(path))
+    return str(path)
+
+
+def _material(m: dict) -> dict:
+    m = dict(m)
+    pbr = m.pop("pbr", {})
+    out = {"pbrMetallicRoughness": g.PbrMetallicRoughness(
+        baseColorFactor=pbr.get("baseColorFactor", [1, 1, 1, 1]), metallicFactor=pbr.get("metallicFactor", 1.0),
+        roughnessFactor=pbr.get("roughnessFactor", 1.0),
+        baseColorTexture=g.TextureInfo(**pbr["baseColorTexture"]) if "baseColorTexture" in pbr else None)}
+    out.update(m)
+    return out
+
+
+def camera_node(to_world_mitsuba: np.ndarray) -> np.ndarray:
+    """The glTF camera node's matrix for a restir (Mitsuba) camera-to-world: glTF's camera looks
+    down -Z with +X to the right, Mitsuba's down +Z with +X to the left."""
+    return np.asarray(to_world_mitsuba, float) @ np.diag([-1.0, 1.0, -1.0, 1.0])
+
+
+def yfov_of(fov_x_deg: float, aspect: float) -> float:
+    return 2 * math.atan(math.tan(math.radians(fov_x_deg) / 2) / aspect)

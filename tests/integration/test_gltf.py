@@ -1,0 +1,187 @@
+"""The glTF 2.0 reader (restir/scene/gltf/): a glTF twin of the Cornell box renders as the same
+box built directly (same materials), a point light over a plane and a directional light on a
+plane match their closed forms, and the reader's conventions and refusals."""
+import io
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import restir
+from restir.scene.builtin import builtin_scene
+from restir.scene.errors import SceneError, SceneWarning
+from tests.gltf_files import camera_node, write_gltf, yfov_of
+from tests.unit.test_bsdf_metallic_roughness import appendix_b
+
+pytest.importorskip("pygltflib")
+
+
+def mr(base, metallic=0.0, roughness=1.0, **extra) -> dict:
+    return {"pbr": {"baseColorFactor": [*base, 1.0], "metallicFactor": metallic, "roughnessFactor": roughness}, **extra}
+
+
+def cornell_twin(tmp_path, size=32):
+    """The builtin Cornell box as a glTF file, its diffuse walls as metallic-roughness (metallic 0,
+    roughness 1, doubleSided), and the same box as a restir dict with those materials."""
+    box = builtin_scene("cornell-box", width=size, height=size, spp=16)
+    meshes, materials, keys = [], [], {}
+    for name, shape in box.items():
+        if not isinstance(shape, dict) or shape.get("type") != "trimesh":
+            continue
+        refl = shape["bsdf"]["bsdf"]["reflectance"]["value"]
+        key = tuple(refl)
+        if key not in keys:
+            extra = {"doubleSided": True}
+            if "emitter" in shape:
+                light = np.array(shape["emitter"]["radiance"]["value"], float)
+                strength = float(light.max())
+                extra.update(emissiveFactor=(light / strength).tolist(),
+                             extensions={"KHR_materials_emissive_strength": {"emissiveStrength": strength}})
+            keys[key] = len(materials)
+            materials.append(mr(refl, **extra))
+        meshes.append((shape["vertices"], shape["faces"], keys[key], {}))
+        shape["bsdf"] = {"type": "twosided", "bsdf": {"type": "metallic_roughness", "base_color": np.array(refl, float),
+                                                      "metallic": 0.0, "roughness": 1.0}}
+    sensor = box["sensor"]
+    sensor["film"]["rfilter"] = {"type": "box"}  # a glTF file has no pixel filter: restir reads it with a box
+    cam = (camera_node(sensor["to_world"]), yfov_of(sensor["fov"], 1.0), 1.0, "main")
+    path = write_gltf(tmp_path / "box.glb", meshes, materials, camera=cam,
+                      extensions_required=["KHR_materials_emissive_strength"])
+    return path, box
+
+
+def test_the_cornell_box_twin_renders_as_the_box(tmp_path):
+    path, box = cornell_twin(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SceneWarning)
+        twin = restir.load_scene(path, camera="main")
+    direct = restir.load_scene(box)
+    assert twin.num_triangles == direct.num_triangles
+    assert np.allclose(twin.camera.to_world, direct.camera.to_world, atol=1e-6)
+    kw = dict(method="pt", spp=64, frames=4, width=32, height=32)
+    a = restir.render(twin, seed=1, **kw)
+    b = restir.render(direct, seed=2, **kw)
+    # 8 x 8 blocks of 4 x 4 pixels: z of the difference of the block means
+    blocks = lambda r: r.image.reshape(8, 4, 8, 4, 3).mean((1, 3))  # noqa: E731
+    var = lambda r: (r.sample_var / r.samples).reshape(8, 4, 8, 4, 3).sum((1, 3)) / 256  # noqa: E731
+    z = (blocks(a) - blocks(b)) / np.sqrt(var(a) + var(b) + 1e-12)
+    # 192 cells at |z| < 4.5: a false failure under 1e-3 (Bonferroni); the smallest detectable
+    # difference is about 4.5 standard errors of a block, about 3% of its mean here
+    assert np.max(np.abs(z)) < 4.5, np.max(np.abs(z))
+    assert abs(a.image.mean() / b.image.mean() - 1) < 0.02
+
+
+def plane(size=10.0, z=0.0):
+    v = np.array([[-size, -size, z], [size, -size, z], [size, size, z], [-size, size, z]], float)
+    return v, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def top_down_camera(height):
+    """A camera node at (0, 0, height) looking down -Z (glTF's own axis), +Y up in the image."""
+    m = np.eye(4)
+    m[2, 3] = height
+    return m
+
+
+@pytest.mark.parametrize("metallic,roughness", [(0.0, 1.0), (0.0, 0.5), (1.0, 0.7)])
+def test_a_point_light_over_a_plane_matches_the_closed_form(tmp_path, metallic, roughness):
+    """The camera and a point light at height h above a plane: the pixel at the centre sees
+    f(n, n) cos I / h^2, with f the specification's BRDF at normal incidence."""
+    h, intensity, base = 2.0, 5.0, np.array([0.6, 0.4, 0.2])
+    v, f = plane()
+    light = ({"type": "point", "color": [1, 1, 1], "intensity": intensity}, top_down_camera(h))
+    path = write_gltf(tmp_path / "p.gltf", [(v, f, 0, {})], [mr(base, metallic, roughness)],
+                      camera=(top_down_camera(h), math.radians(10), 1.0, "cam"), lights=[light])
+    scene = restir.load_scene(path)
+    assert scene.delta_lights[0].kind == "point" and np.allclose(scene.delta_lights[0].intensity, intensity)
+    img = restir.render(scene, method="pt", spp=4, width=9, height=9, seed=3).image
+    n = np.array([[0.0, 0.0, 1.0]])
+    want = appendix_b(base, metallic, max(roughness, 1e-2) ** 2, n, n)[0] * intensity / h ** 2
+    np.testing.assert_allclose(img[4, 4], want, rtol=0.02)
+
+
+def test_a_directional_light_is_irradiance_along_the_nodes_minus_z(tmp_path):
+    """The sun at 60 degrees from the normal: a Lambert-like rough non-metal seen from above has
+    radiance f(wi = n, wo = sun) E."""
+    base = np.array([0.5, 0.5, 0.5])
+    v, f = plane()
+    tilt = math.radians(60)
+    sun = np.eye(4)  # its -Z is the direction the light travels: (sin, 0, -cos)
+    sun[:3, 2] = [-math.sin(tilt), 0.0, math.cos(tilt)]
+    sun[:3, 0] = [math.cos(tilt), 0.0, math.sin(tilt)]
+    light = ({"type": "directional", "color": [1, 1, 1], "intensity": 3.0}, sun)
+    path = write_gltf(tmp_path / "s.gltf", [(v, f, 0, {})], [mr(base, 0.0, 1.0)],
+                      camera=(top_down_camera(2.0), math.radians(10), 1.0, "cam"), lights=[light])
+    scene = restir.load_scene(path)
+    assert np.allclose(scene.delta_lights[0].axis, [math.sin(tilt), 0, -math.cos(tilt)], atol=1e-9)
+    img = restir.render(scene, method="pt", spp=4, width=9, height=9, seed=3).image
+    wi, wo = np.array([[0.0, 0.0, 1.0]]), np.array([[-math.sin(tilt), 0.0, math.cos(tilt)]])
+    want = appendix_b(base, 0.0, 1.0, wi, wo)[0] * 3.0
+    np.testing.assert_allclose(img[4, 4], want, rtol=0.02)
+
+
+def test_the_camera_sees_plus_x_on_the_right(tmp_path):
+    """glTF's camera looks down -Z with +X to the right: an emitter at +X is on the right."""
+    v, f = plane(1.0)
+    v[:, 0] += 1.5  # the square spans x in [0.5, 2.5]
+    path = write_gltf(tmp_path / "c.gltf", [(v, f, 0, {})],
+                      [mr([0, 0, 0], emissiveFactor=[1, 1, 1])], camera=(top_down_camera(3.0), math.radians(90), 1.0, "c"))
+    img = restir.render(restir.load_scene(path), method="pt", spp=1, width=16, height=16, seed=1).image.mean(axis=2)
+    assert img[8, 12] == pytest.approx(1.0) and img[:, :6].max() == 0.0
+
+
+def test_textures_alpha_mask_and_transform(tmp_path):
+    """A 2 x 1 base-colour texture (left red, right blue, alpha 1 and 0) with alphaMode MASK: the
+    blue half is cut out; KHR_texture_transform's offset of half the image swaps the halves."""
+    from PIL import Image
+
+    png = io.BytesIO()
+    Image.fromarray(np.array([[[255, 0, 0, 255], [0, 0, 255, 0]]], np.uint8), "RGBA").save(png, format="PNG")
+    v, f = plane(1.0)
+    uvs = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], float)  # glTF: v = 0 at the image's top
+    images = []
+    for offset in (0.0, 0.5):
+        tex = {"index": 0}
+        if offset:
+            tex["extensions"] = {"KHR_texture_transform": {"offset": [offset, 0.0]}}
+        mat = {"pbr": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0.0, "roughnessFactor": 1.0,
+                       "baseColorTexture": tex}, "alphaMode": "MASK", "emissiveFactor": [0, 0, 0]}
+        light = ({"type": "directional", "color": [1, 1, 1], "intensity": 3.0}, np.eye(4))
+        path = write_gltf(tmp_path / f"t{offset}.glb", [(v, f, 0, {"uvs": uvs})], [mat],
+                          camera=(top_down_camera(2.0), math.radians(60), 1.0, "c"), lights=[light],
+                          images=[png.getvalue()], extensions_required=["KHR_texture_transform"])
+        scene = restir.load_scene(path)
+        images.append(restir.render(scene, method="pt", spp=1, width=16, height=16, seed=1).image)
+    a, b = images
+    # left red (the blue is the 4% specular reflection of the white sun), right cut out
+    assert a[8, 5, 0] > 10 * a[8, 5, 2] > 0 and a[8, 11].max() == 0.0
+    assert b[8, 11, 0] > 10 * b[8, 11, 2] > 0 and b[8, 5].max() == 0.0  # shifted by half
+
+
+def test_transmission_mixes_a_dielectric_in(tmp_path):
+    v, f = plane(1.0)
+    mats = [mr([0.9, 0.9, 0.9], 0.0, 0.0, extensions={"KHR_materials_transmission": {"transmissionFactor": 0.25},
+                                                       "KHR_materials_ior": {"ior": 1.33}})]
+    path = write_gltf(tmp_path / "g.gltf", [(v, f, 0, {})], mats, camera=(top_down_camera(2.0), 1.0, 1.0, "c"),
+                      extensions_required=["KHR_materials_transmission", "KHR_materials_ior"])
+    scene = restir.load_scene(path)
+    kinds = [m.kind for m in scene.materials]
+    assert kinds == ["metallic_roughness", "dielectric", "mixture"]
+    assert math.isclose(scene.materials[2].mix_amount, 0.25) and math.isclose(scene.materials[1].ior, 1.33)
+
+
+def test_refusals_and_warnings(tmp_path):
+    v, f = plane(1.0)
+    path = write_gltf(tmp_path / "r.gltf", [(v, f, 0, {})], [mr([1, 1, 1])], extensions_required=["KHR_draco_mesh_compression"])
+    with pytest.raises(SceneError, match="requires the extension 'KHR_draco_mesh_compression'"):
+        restir.load_scene(path)
+    path = write_gltf(tmp_path / "n.gltf", [(v, f, None, {})], [])
+    with pytest.warns(SceneWarning, match="no camera: the view is a default framing"):
+        scene = restir.load_scene(path)
+    assert scene.materials[0].kind == "metallic_roughness" and scene.materials[0].metallic == 1.0
+    with pytest.raises(SceneError, match="no camera node named 'x'"):
+        restir.load_scene(write_gltf(tmp_path / "m.gltf", [(v, f, 0, {})], [mr([1, 1, 1])],
+                                     camera=(np.eye(4), 1.0, 1.0, "cam")), camera="x")
+    with pytest.raises(SceneError, match="unknown parameter"):
+        restir.load_scene(path, spp=4)
