@@ -82,6 +82,7 @@ EQUAL_TIME_SCENES = [  # (name, title, builtin or shared scene folder)
     ("cornell-box-glossy", "Glossy Cornell box", "builtin:cornell-box-glossy"),
     ("veach-ajar", "Veach Ajar", "veach-ajar"),
     ("staircase2", "Modern Hall", "staircase2"),
+    ("crown", "Crown (pbrt-v4)", "pbrt:crown/crown.pbrt"),
 ]
 EQUAL_TIME_METHODS = ["pt", "restir-pt", "suffix-restir"]
 NO_REUSE = "restir-di:temporal=false,spatial.rounds=0"
@@ -106,6 +107,14 @@ def shared_scene(name: str) -> str | None:
     root = scenes_dir()
     path = os.path.join(root, name, "scene.xml") if root else None
     return path if path and os.path.isfile(path) else None
+
+
+def pbrt_scene(rel: str) -> str | None:
+    """A pbrt-v4 scene from the folder RESTIR_PBRT_SCENES names: a checkout of
+    w3ntao/pbrt-minus-scenes, whose Crown has all its files (docs/guide/pbrt.md)."""
+    root = os.path.expanduser(os.environ.get("RESTIR_PBRT_SCENES", "").strip() or os.path.join(ROOT, "..", "pbrt-scenes"))
+    path = os.path.join(root, rel)
+    return os.path.normpath(path) if os.path.isfile(path) else None
 
 
 def shown_path(path: str) -> str:
@@ -266,11 +275,15 @@ def part_equal_time(args, size) -> dict:
     for name, title, spec in EQUAL_TIME_SCENES:
         if args.scenes and name not in args.scenes:
             continue
-        path = spec if spec.startswith("builtin:") else shared_scene(spec)
+        if spec.startswith("pbrt:"):
+            path = pbrt_scene(spec[5:])
+            where, var = os.environ.get("RESTIR_PBRT_SCENES") or "../pbrt-scenes", "RESTIR_PBRT_SCENES"
+        else:
+            path = spec if spec.startswith("builtin:") else shared_scene(spec)
+            where, var = os.environ.get("RESTIR_SCENES") or "../shared/scenes", "RESTIR_SCENES"
         if path is None:
-            where = os.environ.get("RESTIR_SCENES") or "../shared/scenes"
-            rows.append({"name": name, "title": title, "skipped": f"the shared scene {spec} is not in {where} "
-                         "(set RESTIR_SCENES to the folder holding it)"})
+            rows.append({"name": name, "title": title, "skipped": f"the scene {spec} is not in {where} "
+                         f"(set {var} to the folder holding it)"})
             log(f"equal time: {title} skipped (no {spec} in {where})")
             continue
         with warnings.catch_warnings():

@@ -1,6 +1,7 @@
-"""glTF 2.0 files for the tests, written with pygltflib: meshes given as vertices and faces (each
-its own node, optionally under a matrix), metallic-roughness materials as the specification's
-JSON, a perspective camera and KHR_lights_punctual lights."""
+"""glTF 2.0 for the tests: files written with pygltflib (meshes given as vertices and faces, each
+its own node, optionally under a matrix; metallic-roughness materials as the specification's
+JSON; a perspective camera and KHR_lights_punctual lights), and the specification's BRDF as its
+Appendix B writes it (`appendix_b`), which the BSDF and the reader are checked against."""
 import math
 
 import numpy as np
@@ -95,3 +96,18 @@ def camera_node(to_world_mitsuba: np.ndarray) -> np.ndarray:
 
 def yfov_of(fov_x_deg: float, aspect: float) -> float:
     return 2 * math.atan(math.tan(math.radians(fov_x_deg) / 2) / aspect)
+
+
+def appendix_b(base, metallic, alpha, wi, wo):
+    """f cos_o as the glTF 2.0 specification writes it (Appendix B, "complete model")."""
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    vh, nh, nl, nv = (np.sum(wi * h, 1), h[:, 2], wo[:, 2], wi[:, 2])
+    f0 = 0.04 * (1 - metallic) + base * metallic
+    F = f0[None] + (1 - f0[None]) * ((1 - np.abs(vh)) ** 5)[:, None]
+    a2 = alpha * alpha
+    D = a2 / (np.pi * (nh * nh * (a2 - 1) + 1) ** 2)
+    V = 0.5 / (nl * np.sqrt(nv * nv * (1 - a2) + a2) + nv * np.sqrt(nl * nl * (1 - a2) + a2))
+    c_diff = base * (1 - metallic)
+    f = (1 - F) * c_diff[None] / np.pi + F * (D * V)[:, None]
+    return f * nl[:, None]

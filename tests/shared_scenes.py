@@ -39,3 +39,19 @@ def scene_path(name: str) -> pathlib.Path:
 
 # For @pytest.mark.skipif at collection time.
 requires_scenes = pytest.mark.skipif(scenes_dir() is None, reason=skip_reason())
+
+
+PBRT_ENV = "RESTIR_PBRT_SCENES"
+PBRT_DEFAULT = pathlib.Path(__file__).resolve().parents[2] / "pbrt-scenes"
+
+
+def pbrt_scene_path(rel: str) -> pathlib.Path:
+    """A file of the pbrt-v4 scenes (a checkout of w3ntao/pbrt-minus-scenes) in the folder named by
+    $RESTIR_PBRT_SCENES, else ../pbrt-scenes beside the checkout; skips the calling test when it is
+    not there."""
+    value = os.environ.get(PBRT_ENV, "").strip()
+    root = pathlib.Path(value).expanduser() if value else PBRT_DEFAULT
+    path = root / rel
+    if not path.is_file():
+        pytest.skip(f"{path} not found: set {PBRT_ENV} to a checkout of w3ntao/pbrt-minus-scenes")
+    return path

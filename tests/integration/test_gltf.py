@@ -11,8 +11,7 @@ import pytest
 import restir
 from restir.scene.builtin import builtin_scene
 from restir.scene.errors import SceneError, SceneWarning
-from tests.gltf_files import camera_node, write_gltf, yfov_of
-from tests.unit.test_bsdf_metallic_roughness import appendix_b
+from tests.gltf_files import appendix_b, camera_node, write_gltf, yfov_of
 
 pytest.importorskip("pygltflib")
 

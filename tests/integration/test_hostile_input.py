@@ -237,7 +237,8 @@ def test_hostile_reference_images_are_refused(name, message, capsys):
 
 
 def test_every_hostile_file_is_tested():
-    assert {p.name for p in HOSTILE.glob("*.xml")} == {name for name, _, _ in SCENES} | {"emitter_zero_area.xml"}
+    scenes = {p.name for ext in ("xml", "pbrt", "gltf", "glb") for p in HOSTILE.glob(f"*.{ext}")}
+    assert scenes == {name for name, _, _ in SCENES} | {"emitter_zero_area.xml"}
     assert {p.name for p in HOSTILE.glob("reference_*")} == {name for name, _ in REFERENCES}
 
 

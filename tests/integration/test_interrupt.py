@@ -91,5 +91,11 @@ def test_ctrl_c_while_the_command_starts_is_a_clean_stop(after_s, tmp_path):
     time.sleep(after_s)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
+    if p.returncode == -signal.SIGINT:
+        # the Ctrl-C came while the interpreter itself started, before restir_cli.main set its
+        # handler (the first tenth of a second on a busy machine): Python ends by the signal,
+        # which a shell reports as 130 too, with at most a traceback of its own startup
+        assert os.sep + "restir" + os.sep not in err, err
+        return
     assert p.returncode == 130 and "Traceback" not in err, (p.returncode, err)
     assert "interrupted" in err, err

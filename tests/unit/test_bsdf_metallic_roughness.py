@@ -9,6 +9,8 @@ from restir.device.bsdf import Material, bsdf_eval, bsdf_sample
 from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.types import MAT_METALLIC_ROUGHNESS
 
+from tests.gltf_files import appendix_b
+
 from .test_bsdf import material
 
 BASE = np.array([0.8, 0.5, 0.2])  # test_bsdf.material's reflectance
@@ -41,21 +43,6 @@ def upper_dirs(rng, n):
     v = rng.normal(size=(n, 3))
     v[:, 2] = np.abs(v[:, 2]) + 1e-3
     return (v / np.linalg.norm(v, axis=1, keepdims=True)).astype(np.float32)
-
-
-def appendix_b(base, metallic, alpha, wi, wo):
-    """f cos_o as the glTF 2.0 specification writes it (Appendix B, "complete model")."""
-    h = wi + wo
-    h /= np.linalg.norm(h, axis=1, keepdims=True)
-    vh, nh, nl, nv = (np.sum(wi * h, 1), h[:, 2], wo[:, 2], wi[:, 2])
-    f0 = 0.04 * (1 - metallic) + base * metallic
-    F = f0[None] + (1 - f0[None]) * ((1 - np.abs(vh)) ** 5)[:, None]
-    a2 = alpha * alpha
-    D = a2 / (np.pi * (nh * nh * (a2 - 1) + 1) ** 2)
-    V = 0.5 / (nl * np.sqrt(nv * nv * (1 - a2) + a2) + nv * np.sqrt(nl * nl * (1 - a2) + a2))
-    c_diff = base * (1 - metallic)
-    f = (1 - F) * c_diff[None] / np.pi + F * (D * V)[:, None]
-    return f * nl[:, None]
 
 
 @pytest.mark.parametrize("metallic,alpha", CASES)
