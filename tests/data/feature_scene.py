@@ -23,7 +23,9 @@
   beam_width and cutoff_angle) and a directional light, alone or mixed with an area light and a
   constant environment, over a diffuse floor, a rough conductor wall and a rough plastic sphere
   (whose shadows and glossy highlights show where each light is); `write_thinlens_scene`: the
-  same room lit by its area light and the point light, seen through Mitsuba 3's thin lens.
+  same room lit by its area light and the point light, seen through Mitsuba 3's thin lens;
+- `write_material_scene`: the materials of the pbrt-v4 and glTF readers (restir's own plugins:
+  metallic_roughness, mixture, a textured roughness), for the matrices only.
 
 Both the Mitsuba reference generator and the test call them, so they render identical inputs.
 `SCENES` names them.
@@ -389,7 +391,55 @@ def write_thinlens_scene(directory: str) -> str:
     return write_delta_scene(directory, ("point", "area"), lens)
 
 
-SCENES = {"features": write_feature_scene, "textures": write_texture_scene, "bumps": write_bump_scene,
+MATERIAL_ROOM = """    <texture type="bitmap" id="stripes"><string name="filename" value="stripes.png"/><boolean name="raw" value="true"/>
+        <string name="filter_type" value="nearest"/></texture>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="metallic_roughness"><rgb name="base_color" value="0.6, 0.55, 0.5"/><float name="metallic" value="0"/>
+            <float name="roughness" value="0.5"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><translate z="2"/></transform>
+        <bsdf type="roughconductor"><string name="distribution" value="ggx"/><ref name="alpha" id="stripes"/>
+            <boolean name="remap_roughness" value="true"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.6, 0.5, 0.3"/><float name="radius" value="0.5"/>
+        <bsdf type="mixture">
+            <bsdf name="bsdf_a" type="metallic_roughness"><rgb name="base_color" value="1.0, 0.78, 0.34"/>
+                <float name="metallic" value="1"/><float name="roughness" value="0.45"/></bsdf>
+            <bsdf name="bsdf_b" type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.8"/></bsdf>
+            <ref name="amount" id="stripes"/>
+        </bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.8, 0.35, -0.3"/><float name="radius" value="0.35"/>
+        <bsdf type="twosided"><bsdf type="metallic_roughness"><rgb name="base_color" value="0.8, 0.2, 0.1"/>
+            <float name="metallic" value="0.5"/><float name="roughness" value="0.6"/></bsdf></bsdf>
+    </shape>
+"""
+
+
+def write_material_scene(directory: str) -> str:
+    """glTF's metallic-roughness BSDF (a rough non-metal floor, a half-metal sphere), a rough
+    conductor whose pbrt-v4 roughness is a texture (stripes of roughness 0.04 and 0.36: alpha 0.2
+    and 0.6), and a per-point mixture of a gold metallic-roughness and a blue diffuse by the same
+    stripes, lit by the area light and the point light: the materials the pbrt-v4 and glTF
+    readers add, for the matrices (restir's own plugins, so no Mitsuba 3 reference)."""
+    from PIL import Image
+
+    os.makedirs(directory, exist_ok=True)
+    stripes = np.where((np.arange(8) // 2) % 2 == 0, 0.04, 0.36)
+    img = np.repeat(np.tile(stripes, (8, 1))[..., None], 3, axis=2)
+    Image.fromarray((img * 255 + 0.5).astype(np.uint8)).save(os.path.join(directory, "stripes.png"))
+    path = os.path.join(directory, "scene.xml")
+    with open(path, "w") as f:
+        f.write(_header("50", "0, 1.5, -4", "0, 0.5, 0") + MATERIAL_ROOM + DELTA_LIGHTS["area"] + DELTA_LIGHTS["point"]
+                + "</scene>\n")
+    return path
+
+
+SCENES = {"features": write_feature_scene, "materials": write_material_scene, "textures": write_texture_scene, "bumps": write_bump_scene,
           "masks": write_mask_scene, "delta-lights": write_delta_scene, "thinlens": write_thinlens_scene,
           # the delta lights alone: points and spots (no other light), and the sun
           "delta-only": lambda d: write_delta_scene(d, ("point", "spot")),

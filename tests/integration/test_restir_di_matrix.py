@@ -25,7 +25,7 @@ import pytest
 import restir
 from restir.validation import IndependentRuns
 from tests.helpers import MATRIX_CAMERAS, check
-from tests.helpers import LIGHT_MATRIX_SCENES
+from tests.helpers import LIGHT_MATRIX_SCENES, MATERIAL_MATRIX_SCENES
 from tests.scenes import bump_scene, feature_scene_named, half_dark_scene, mask_scene, shadow_scene
 
 RUNS, FRAMES, SIZE = 64, 8, 32
@@ -87,7 +87,7 @@ def scene(name):
         from tests.data.feature_scene import write_feature_scene
 
         return restir.load_scene(write_feature_scene(tempfile.mkdtemp()))
-    if name in LIGHT_MATRIX_SCENES:
+    if name in LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES:
         return feature_scene_named(name)
     return restir.load_scene(f"builtin:{name}")
 
@@ -131,6 +131,6 @@ def test_restir_di_matrix_on_bump_maps_and_masks(name, config):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", BUMP_CELLS)
-@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES)
 def test_restir_di_matrix_on_delta_lights_and_a_lens(name, config):
     test_restir_di_matrix(name, config)

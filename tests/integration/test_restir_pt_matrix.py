@@ -21,7 +21,7 @@ and an environment, the points and spots alone, the sun alone, a thin lens) with
 
 import pytest
 
-from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, MATERIAL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"temporal": False, "spatial.rounds": 0}
 SPATIAL = {"temporal": False}
@@ -115,7 +115,7 @@ LIGHT_CELLS = ["C1-candidates-1", "C3-hybrid-k3", "C3-reconnection-k3", "C3-repl
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", LIGHT_CELLS)
-@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES)
 def test_restir_pt_matrix_on_delta_lights_and_a_lens(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")

@@ -17,7 +17,7 @@ mask scenes, the cells of BUMP_CELLS. Welch z per channel at image, tile and pix
 import pytest
 
 from restir.integrators.suffix_restir.pipeline import MMIS_BASELINE
-from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
+from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, MATERIAL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
 
 NO_REUSE = {"prefix.temporal": False, "suffix.temporal": False, "suffix.spatial.rounds": 0}
 # The official prototype's direct light, the ReSTIR DI component: the default until 2026-12-06, when
@@ -98,7 +98,7 @@ LIGHT_CELLS = ["C5-gather-N2-M4", "C5-prefix-temporal", "C5-suffix-temporal", "C
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", LIGHT_CELLS)
-@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES)
+@pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES)
 def test_suffix_restir_matrix_on_delta_lights_and_a_lens(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
