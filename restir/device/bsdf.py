@@ -31,6 +31,8 @@ from .bsdfs.conductor import CONDUCTOR_LOBES, ROUGHCONDUCTOR_LOBES, conductor_sa
 from .bsdfs.dielectric import (DIELECTRIC_LOBES, ROUGHDIELECTRIC_LOBES, dielectric_sample, roughdielectric_eval,
                                roughdielectric_pdf, roughdielectric_sample, thindielectric_sample)
 from .bsdfs.diffuse import DIFFUSE_LOBES, diffuse_eval, diffuse_pdf, diffuse_sample
+from .bsdfs.diffuse_transmission import (DIFFUSE_TRANSMISSION_LOBES, diffuse_transmission_eval, diffuse_transmission_pdf,
+                                         diffuse_transmission_sample)
 from .bsdfs.metallic_roughness import (METALLIC_ROUGHNESS_LOBES, metallic_roughness_eval, metallic_roughness_eval_parts,
                                        metallic_roughness_pdf, metallic_roughness_pdf_parts, metallic_roughness_sample)
 from .bsdfs.material import BSDFSample, Material, flip_z, invalid_sample, null_sample  # noqa: F401  (the BSDF interface)
@@ -40,6 +42,7 @@ from .bsdfs.plastic import (PLASTIC_LOBES, ROUGHPLASTIC_LOBES, plastic_eval, pla
 from .bump import bump_factor
 from .types import (
     LOBE_DIFFUSE_REFLECTION,
+    LOBE_DIFFUSE_TRANSMISSION,
     LOBE_GLOSSY_REFLECTION,
     LOBE_GLOSSY_TRANSMISSION,
     LOBE_NULL,
@@ -49,6 +52,7 @@ from .types import (
     MAT_CONDUCTOR,
     MAT_DIELECTRIC,
     MAT_DIFFUSE,
+    MAT_DIFFUSE_TRANSMISSION,
     MAT_METALLIC_ROUGHNESS,
     MAT_PLASTIC,
     MAT_ROUGHCONDUCTOR,
@@ -97,6 +101,8 @@ def kind_eval(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> wp.vec3:
         return roughplastic_eval(mat, wi, wo)
     if mat.kind == MAT_METALLIC_ROUGHNESS:
         return metallic_roughness_eval(mat, wi, wo)
+    if mat.kind == MAT_DIFFUSE_TRANSMISSION:
+        return diffuse_transmission_eval(mat, wi, wo)
     return wp.vec3(0.0)  # delta-only kinds
 
 
@@ -119,6 +125,8 @@ def kind_pdf(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3) -> float:
         return roughplastic_pdf(mat, wi, wo)
     if mat.kind == MAT_METALLIC_ROUGHNESS:
         return metallic_roughness_pdf(mat, wi, wo)
+    if mat.kind == MAT_DIFFUSE_TRANSMISSION:
+        return diffuse_transmission_pdf(mat, wi, wo)
     return 0.0  # delta-only kinds
 
 
@@ -163,6 +171,8 @@ def kind_sample(mat: Material, wi: wp.vec3, u_lobe: float, u: wp.vec2) -> BSDFSa
         return roughplastic_sample(mat, wi, u_lobe, u)
     if mat.kind == MAT_METALLIC_ROUGHNESS:
         return metallic_roughness_sample(mat, wi, u_lobe, u)
+    if mat.kind == MAT_DIFFUSE_TRANSMISSION:
+        return diffuse_transmission_sample(mat, wi, u_lobe, u)
     return invalid_sample()
 
 
@@ -230,6 +240,8 @@ def kind_lobes(mat: Material) -> int:
         return ROUGHPLASTIC_LOBES
     if mat.kind == MAT_METALLIC_ROUGHNESS:
         return METALLIC_ROUGHNESS_LOBES
+    if mat.kind == MAT_DIFFUSE_TRANSMISSION:
+        return DIFFUSE_TRANSMISSION_LOBES
     return 0
 
 
@@ -252,6 +264,8 @@ def smooth_lobe(mat: Material, wi: wp.vec3, wo: wp.vec3) -> int:
         return LOBE_GLOSSY_REFLECTION
     if mat.kind == MAT_ROUGHDIELECTRIC:
         return wp.where(wi[2] * wo[2] > 0.0, LOBE_GLOSSY_REFLECTION, LOBE_GLOSSY_TRANSMISSION)
+    if mat.kind == MAT_DIFFUSE_TRANSMISSION:
+        return wp.where(wi[2] * wo[2] > 0.0, LOBE_DIFFUSE_REFLECTION, LOBE_DIFFUSE_TRANSMISSION)
     return 0
 
 

@@ -11,6 +11,7 @@ MAT_ROUGHDIELECTRIC = wp.constant(5)
 MAT_PLASTIC = wp.constant(6)
 MAT_ROUGHPLASTIC = wp.constant(7)
 MAT_METALLIC_ROUGHNESS = wp.constant(8)  # glTF 2.0's (not a Mitsuba plugin: restir's `metallic_roughness`)
+MAT_DIFFUSE_TRANSMISSION = wp.constant(9)  # pbrt-v4's `diffusetransmission` (restir's `diffuse_transmission`)
 
 # How a textured roughness becomes a microfacet alpha (Material.roughness_remap).
 ROUGHNESS_IS_ALPHA = wp.constant(0)   # Mitsuba 3's textured alpha

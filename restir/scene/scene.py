@@ -15,7 +15,8 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided", "bumpmap", "mask", "mixture", "metallic_roughness"},
+             "roughplastic", "twosided", "bumpmap", "mask", "mixture", "metallic_roughness",
+             "diffuse_transmission"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh", "triangles"},
     "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
     "sensor": {"perspective", "thinlens"},
@@ -528,6 +529,10 @@ class _Builder:
                              "(as Bitterli's scenes do)", p.loc)
         if t == "diffuse":
             self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.5))
+        if t == "diffuse_transmission":  # restir's: pbrt-v4's (device/bsdfs/diffuse_transmission.py)
+            self.spectrum(p, m, "reflectance", "reflectance", np.full(3, 0.25))
+            self.spectrum(p, m, "transmittance", "specular_transmittance", np.full(3, 0.25))
+            m.twosided = True  # the same from both sides
         if t == "metallic_roughness":  # restir's: glTF 2.0's material (device/bsdfs/metallic_roughness.py)
             self.spectrum(p, m, "base_color", "reflectance", np.ones(3))
             m.distribution = "ggx"
@@ -840,11 +845,15 @@ class _Builder:
                 raise SceneError("radiance must be non-negative", p._loc_of("radiance"))
             self.env = ("constant", radiance, rot, None)
         else:
-            fname = p.string("filename")
-            path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
-            if not os.path.exists(path):
-                raise SceneError(f"environment map '{fname}' not found", p.loc)
-            img = _read_image(path, fname, p.loc, linearize_srgb=True)
+            if p.has("data"):  # restir extension for other formats' loaders: the map decoded already
+                p.queried.add("data")
+                img, fname = np.ascontiguousarray(np.asarray(p.obj["data"], np.float32)), "(data)"
+            else:
+                fname = p.string("filename")
+                path = fname if os.path.isabs(fname) else os.path.join(self.base_dir, fname)
+                if not os.path.exists(path):
+                    raise SceneError(f"environment map '{fname}' not found", p.loc)
+                img = _read_image(path, fname, p.loc, linearize_srgb=True)
             if img.shape[0] < 3 or img.shape[1] < 2:
                 raise SceneError(f"environment map '{fname}' must be at least 2x3 pixels", p.loc)
             scale = p.float("scale", 1.0)

@@ -56,3 +56,14 @@ def transform_normals(m: np.ndarray, n: np.ndarray) -> np.ndarray:
     out = n @ inv_t.T
     ln = np.linalg.norm(out, axis=-1, keepdims=True)
     return out / np.where(ln > 0, ln, 1)
+
+
+def frame_along(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """A rigid 4x4 transform whose local +z is the unit vector z and whose origin is `origin`
+    (the x axis any perpendicular one): a spot's to_world from where it is and where it shines."""
+    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(a, z)
+    x /= np.linalg.norm(x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(z, x), z, origin
+    return m

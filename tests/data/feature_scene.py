@@ -25,7 +25,7 @@
   (whose shadows and glossy highlights show where each light is); `write_thinlens_scene`: the
   same room lit by its area light and the point light, seen through Mitsuba 3's thin lens;
 - `write_material_scene`: the materials of the pbrt-v4 and glTF readers (restir's own plugins:
-  metallic_roughness, mixture, a textured roughness), for the matrices only.
+  metallic_roughness, mixture, a textured roughness, diffuse_transmission), for the matrices only.
 
 Both the Mitsuba reference generator and the test call them, so they render identical inputs.
 `SCENES` names them.
@@ -417,14 +417,20 @@ MATERIAL_ROOM = """    <texture type="bitmap" id="stripes"><string name="filenam
         <bsdf type="twosided"><bsdf type="metallic_roughness"><rgb name="base_color" value="0.8, 0.2, 0.1"/>
             <float name="metallic" value="0.5"/><float name="roughness" value="0.6"/></bsdf></bsdf>
     </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.45"/><rotate x="1" angle="-60"/><translate x="0.3" y="1.0" z="-0.9"/></transform>
+        <bsdf type="diffuse_transmission"><rgb name="reflectance" value="0.3, 0.5, 0.2"/>
+            <rgb name="transmittance" value="0.4, 0.6, 0.2"/></bsdf>
+    </shape>
 """
 
 
 def write_material_scene(directory: str) -> str:
     """glTF's metallic-roughness BSDF (a rough non-metal floor, a half-metal sphere), a rough
     conductor whose pbrt-v4 roughness is a texture (stripes of roughness 0.04 and 0.36: alpha 0.2
-    and 0.6), and a per-point mixture of a gold metallic-roughness and a blue diffuse by the same
-    stripes, lit by the area light and the point light: the materials the pbrt-v4 and glTF
+    and 0.6), a per-point mixture of a gold metallic-roughness and a blue diffuse by the same
+    stripes, and pbrt-v4's diffuse transmission on a tilted leaf between the lights and the
+    floor, lit by the area light and the point light: the materials the pbrt-v4 and glTF
     readers add, for the matrices (restir's own plugins, so no Mitsuba 3 reference)."""
     from PIL import Image
 

@@ -10,7 +10,8 @@ import warp as wp
 from restir.device.bsdf import Material, bsdf_eval, bsdf_pdf, bsdf_sample
 from restir.device.fresnel import fresnel_conductor, fresnel_dielectric
 from restir.device.rng import rng_key, rng_uniform, rng_uniform2
-from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_METALLIC_ROUGHNESS, MAT_ROUGHCONDUCTOR,
+from restir.device.types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_DIFFUSE_TRANSMISSION, MAT_METALLIC_ROUGHNESS,
+                                 MAT_ROUGHCONDUCTOR,
                                  MAT_PLASTIC, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN,
                                  MICROFACET_GGX)
 from restir.validation.stats import chi2_test, expected_counts, histogram_directions, integration_points
@@ -123,6 +124,8 @@ SMOOTH_CASES = [
     ("plastic-grazing", material(MAT_PLASTIC, ior=1.49), direction(85)),
     ("roughplastic-ggx", material(MAT_ROUGHPLASTIC, (0.2, 0.2), ior=1.49), direction(40)),
     ("roughplastic-beckmann-grazing", material(MAT_ROUGHPLASTIC, (0.3, 0.3), MICROFACET_BECKMANN, ior=1.49), direction(80)),
+    ("diffuse-transmission", material(MAT_DIFFUSE_TRANSMISSION, twosided=1), direction(40)),
+    ("diffuse-transmission-back", material(MAT_DIFFUSE_TRANSMISSION, twosided=1), direction(70, below=True)),
     ("metallic-roughness-dielectric", material(MAT_METALLIC_ROUGHNESS, (0.2, 0.2)), direction(40)),
     ("metallic-roughness-half", material(MAT_METALLIC_ROUGHNESS, (0.35, 0.35), metallic=0.5), direction(70)),
     ("metallic-roughness-metal", material(MAT_METALLIC_ROUGHNESS, (0.15, 0.15), metallic=1.0), direction(20)),

@@ -18,7 +18,8 @@ from restir.device.rng import rng_key, rng_uniform, rng_uniform2
 from restir.device.sampling import square_to_uniform_sphere
 from restir.device.types import (LOBE_DELTA_REFLECTION, LOBE_DELTA_TRANSMISSION, LOBE_DIFFUSE_REFLECTION,
                                  LOBE_DIFFUSE_TRANSMISSION, LOBE_GLOSSY_REFLECTION, LOBE_GLOSSY_TRANSMISSION,
-                                 LOBES_ALL, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_METALLIC_ROUGHNESS, MAT_PLASTIC,
+                                 LOBES_ALL, MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_DIFFUSE_TRANSMISSION,
+                                 MAT_METALLIC_ROUGHNESS, MAT_PLASTIC,
                                  MAT_ROUGHCONDUCTOR, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC)
 
 from .test_bsdf import material
@@ -36,6 +37,7 @@ MATERIALS = {
     "roughplastic": lambda: material(MAT_ROUGHPLASTIC, alpha=(0.2, 0.2)),
     "roughplastic-twosided": lambda: material(MAT_ROUGHPLASTIC, alpha=(0.2, 0.2), twosided=1),
     "metallic-roughness": lambda: material(MAT_METALLIC_ROUGHNESS, alpha=(0.25, 0.25), metallic=0.4),
+    "diffuse-transmission": lambda: material(MAT_DIFFUSE_TRANSMISSION, twosided=1),
 }
 
 

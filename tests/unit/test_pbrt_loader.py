@@ -205,7 +205,7 @@ def test_materials_map_onto_restirs(tmp_path):
     ('Material "diffuse" "texture reflectance" "nope"\n', "unknown texture 'nope'"),
     ('NamedMaterial "nope"\n', "unknown named material 'nope'"),
     ('LightSource "goniometric"\n', "LightSource 'goniometric' is not supported"),
-    ('LightSource "infinite" "string filename" "sky.exr"\n', r"an image \(equal-area environment map\) is not supported"),
+    ('LightSource "infinite" "string filename" "sky.exr"\n', "infinite: environment map 'sky.exr' not found"),
     ('AreaLightSource "diffuse" "bool twosided" true\n', "'twosided' emitters are not supported yet"),
     ('ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n', "an animated transform"),
     ('Attribute "shape" "float alpha" 0.5\n', r"Attribute \"shape\" \(default parameters\) is not supported"),
@@ -268,3 +268,49 @@ def test_a_textured_roughness_renders_as_the_same_constant(tmp_path):
         images.append(restir.render(scene, method="pt", spp=4, seed=2).image)
     assert images[0].max() > 0.01
     assert np.allclose(images[0], images[1], rtol=1e-5, atol=1e-7)
+
+
+# ----------------------------------------------------------------------------- diffusetransmission, image lights
+def test_diffusetransmission_maps_with_its_scale(tmp_path):
+    path = write(tmp_path, CAMERA + "WorldBegin\n" + SUN
+                 + 'Material "diffusetransmission" "rgb reflectance" [ 0.2 0.3 0.4 ] "rgb transmittance" [ 0.5 0.4 0.3 ] '
+                 '"float scale" 0.5\n' + quad(-1, 1, -1, 1, 5))
+    m = restir.load_scene(path).materials[0]
+    assert m.kind == "diffuse_transmission" and m.twosided
+    assert np.allclose(m.reflectance, [0.1, 0.15, 0.2]) and np.allclose(m.specular_transmittance, [0.25, 0.2, 0.15])
+
+
+def test_the_equal_area_map_is_equal_area_and_centred_on_plus_z():
+    from restir.scene.pbrt.lights import equal_area_sphere_to_square
+
+    uv = equal_area_sphere_to_square(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]))
+    assert np.allclose(uv[0], [0.5, 0.5]) and np.allclose(uv[1], [1.0, 1.0]) and np.allclose(uv[2], [1.0, 0.5])
+    rng = np.random.default_rng(1)
+    d = rng.normal(size=(400_000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    counts = np.histogram2d(*equal_area_sphere_to_square(d).T, bins=8, range=[[0, 1], [0, 1]])[0]
+    from scipy import stats
+
+    assert stats.chisquare(counts.reshape(-1)).pvalue > 1e-3  # uniform directions land uniformly
+
+
+def test_an_image_infinite_light_shines_from_its_maps_centre_along_the_lights_plus_z(tmp_path):
+    """A texel at the map's centre is the light-space direction +z; the light's transform turns it
+    (here +z to +x), and restir's latitude-longitude map holds it in that direction."""
+    img = np.full((32, 32, 3), 0.1, np.float32)
+    img[15:17, 15:17] = 50.0
+    np.save(tmp_path / "sky.npy", img)
+    path = write(tmp_path, CAMERA + "WorldBegin\nAttributeBegin\nRotate 90 0 1 0\n"
+                 'LightSource "infinite" "string filename" "sky.npy" "float scale" 2\nAttributeEnd\n'
+                 + quad(-1, 1, -1, 1, 5))
+    with pytest.warns(SceneWarning, match="resampled to a latitude-longitude map"):
+        scene = restir.load_scene(path)
+    assert scene.env_kind == "envmap" and scene.env_image.shape == (64, 128, 3) and np.allclose(scene.env_radiance, 2)
+    rows, cols = np.nonzero(scene.env_image[..., 0] > 10)
+    theta, phi = math.pi * (rows + 0.5) / 64, 2 * math.pi * (cols + 0.5) / 128
+    local = np.stack([np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], -1)
+    world = scene.env_to_world @ local.mean(axis=0)
+    assert np.dot(world / np.linalg.norm(world), [1.0, 0.0, 0.0]) > 0.999, world
+    # the map's mean over the sphere (latitude rows weighted by their solid angle) is the source's mean
+    w = np.sin(math.pi * (np.arange(64) + 0.5) / 64)[:, None]
+    assert abs((scene.env_image[..., 0] * w).sum() / (w.sum() * 128) / img[..., 0].mean() - 1) < 0.05

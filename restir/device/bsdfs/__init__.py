@@ -6,6 +6,9 @@ one BxDF's functions together); `device/bsdf.py` dispatches over them.
 - conductor.py: smooth and rough conductors (Fresnel of a complex IOR).
 - dielectric.py: smooth, thin and rough dielectrics.
 - plastic.py: Mitsuba's smooth and rough plastic (a dielectric coat over a diffuse base).
+- metallic_roughness.py: glTF 2.0's metallic-roughness material.
+- diffuse_transmission.py: pbrt-v4's diffuse reflection and transmission.
+- registry.py: the table of kinds that the dispatch in device/bsdf.py is checked against.
 
 Every function works in the local shading frame on the material's front side: the dispatcher
 mirrors two-sided materials hit from the back before calling them. A kind's `*_sample` picks the

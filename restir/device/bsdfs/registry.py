@@ -10,7 +10,7 @@ dispatch handles every entry (and that no module or constant is missing from the
 """
 from dataclasses import dataclass
 
-from ..types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_METALLIC_ROUGHNESS, MAT_PLASTIC,
+from ..types import (MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_DIFFUSE_TRANSMISSION, MAT_METALLIC_ROUGHNESS, MAT_PLASTIC,
                      MAT_ROUGHCONDUCTOR, MAT_ROUGHDIELECTRIC, MAT_ROUGHPLASTIC, MAT_THINDIELECTRIC)
 
 
@@ -35,4 +35,7 @@ MATERIAL_KINDS = (
     MaterialKind("roughplastic", int(MAT_ROUGHPLASTIC), "MAT_ROUGHPLASTIC", "plastic", True, True),
     MaterialKind("metallic_roughness", int(MAT_METALLIC_ROUGHNESS), "MAT_METALLIC_ROUGHNESS", "metallic_roughness",
                  True, True),
+    # one non-delta lobe on each side: wo's side says which (smooth_lobe)
+    MaterialKind("diffuse_transmission", int(MAT_DIFFUSE_TRANSMISSION), "MAT_DIFFUSE_TRANSMISSION",
+                 "diffuse_transmission", True, False),
 )

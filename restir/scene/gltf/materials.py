@@ -151,9 +151,7 @@ class Materials:
                                "passes straight through with probability 1 - alpha; no refraction or tint)")
                 if alpha_tex is not None:
                     opacity = self.bitmap(np.repeat(alpha_tex[0][..., None], 3, axis=2), alpha_tex[1])
-            if not isinstance(opacity, dict) and opacity >= 1.0:
-                pass
-            else:
+            if isinstance(opacity, dict) or opacity < 1.0:  # an opacity of 1 is no mask at all
                 b = {"type": "mask", "opacity": opacity if isinstance(opacity, dict) else np.full(3, opacity), "bsdf": b}
         emissive = np.array(m.emissiveFactor or [0, 0, 0], float)
         strength = float(ext.get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0))

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import SceneError, warn
 from ..shapes import TriMesh
+from ..transforms import frame_along
 from .accessors import Buffers
 from .materials import Materials
 
@@ -228,12 +229,7 @@ class _Reader:
             if not 0 <= inner < outer <= math.pi / 2:
                 raise SceneError(f"light {index}: the spot needs 0 <= innerConeAngle < outerConeAngle <= pi/2",
                                  self.path)
-            frame = np.eye(4)
-            a = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-            x = np.cross(a, axis)
-            x /= np.linalg.norm(x)
-            frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x, np.cross(axis, x), axis, pos
-            self.emitters.append({"type": "spot", "to_world": frame, "intensity": color,
+            self.emitters.append({"type": "spot", "to_world": frame_along(axis, pos), "intensity": color,
                                   "cutoff_angle": math.degrees(outer), "beam_width": math.degrees(inner),
                                   "falloff": "squared_ramp", "_loc": self.path})
         else:

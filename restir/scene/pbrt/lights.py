@@ -6,13 +6,17 @@ when `power` (or a distant or infinite light's `illuminance`) is given, as pbrt-
 a point light's 4 pi, a spot's 2 pi (1 - (cos_start + cos_end) / 2), an area light's pi A (2 pi A
 two-sided), an infinite light's pi. The film's imaging ratio (camera.py) multiplies all of them.
 A spot's falloff is pbrt-v4's smoothstep between the cones at `coneangle - conedeltaangle` and
-`coneangle`.
+`coneangle`. An image infinite light's equal-area map is resampled to restir's
+latitude-longitude map (image_infinite_light).
 """
 import math
+import os
 
 import numpy as np
 
-from ..errors import SceneError
+from ...image_io import read_image
+from ..errors import SceneError, warn
+from ..transforms import frame_along
 from . import spectra
 from .params import ParamSet
 
@@ -32,7 +36,7 @@ def _power(ps: ParamSet, name: str) -> float | None:
     return v if v > 0 else None
 
 
-def light_source(kind: str, ps: ParamSet, ctm: np.ndarray, ratio: float) -> dict:
+def light_source(kind: str, ps: ParamSet, ctm: np.ndarray, ratio: float, base_dir: str = ".") -> dict:
     """A LightSource directive as an emitter object (point, spot, directional, constant)."""
     if kind not in LIGHTS:
         raise SceneError(f"LightSource '{kind}' is not supported (supported: {', '.join(LIGHTS)})", ps.loc)
@@ -60,7 +64,7 @@ def light_source(kind: str, ps: ParamSet, ctm: np.ndarray, ratio: float) -> dict
         axis = ctm[:3, :3] @ (p_to - p_from)
         if np.linalg.norm(axis) <= 0:
             raise SceneError("spot: 'from' and 'to' coincide", ps.loc)
-        out = {"type": "spot", "to_world": _frame(axis / np.linalg.norm(axis), pos), "intensity": i,
+        out = {"type": "spot", "to_world": frame_along(axis / np.linalg.norm(axis), pos), "intensity": i,
                "cutoff_angle": cone, "beam_width": cone - delta, "falloff": "smoothstep"}
     elif kind == "distant":
         e = colour(ps, "L", ratio)
@@ -71,10 +75,9 @@ def light_source(kind: str, ps: ParamSet, ctm: np.ndarray, ratio: float) -> dict
         if np.linalg.norm(d) <= 0:
             raise SceneError("distant: 'from' and 'to' coincide", ps.loc)
         out = {"type": "directional", "direction": d / np.linalg.norm(d), "irradiance": e}
+    elif ps.has("filename"):
+        return image_infinite_light(ps, ctm, ratio, base_dir)
     else:
-        if ps.has("filename"):
-            raise SceneError("infinite: an image (equal-area environment map) is not supported yet; a constant "
-                             "'L' is", ps.loc_of("filename"))
         if ps.has("portal"):
             raise SceneError("infinite: 'portal' is not supported", ps.loc_of("portal"))
         radiance = colour(ps, "L", ratio)
@@ -85,6 +88,70 @@ def light_source(kind: str, ps: ParamSet, ctm: np.ndarray, ratio: float) -> dict
     ps.warn_unused()
     out["_loc"] = ps.loc
     return out
+
+
+def image_infinite_light(ps: ParamSet, ctm: np.ndarray, ratio: float, base_dir: str) -> dict:
+    """pbrt-v4's image infinite light: a square image in the equal-area octahedral mapping of the
+    sphere (Clarberg's), looked up at the nearest texel, resampled here to restir's
+    latitude-longitude map at 4n x 2n texels (each looking up pbrt-v4's texel in its direction; a
+    warning says so), turned by the light's transform."""
+    fname = ps.string("filename")
+    path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
+    if not os.path.isfile(path):
+        raise SceneError(f"infinite: environment map '{fname}' not found", ps.loc_of("filename"))
+    for p in ("portal", "illuminance", "L"):
+        if ps.has(p):
+            raise SceneError(f"infinite: '{p}' with an image is not supported", ps.loc_of(p))
+    try:
+        img = read_image(path, linearize_srgb=True)
+    except Exception as e:  # the image libraries raise many types
+        raise SceneError(f"infinite: cannot read '{fname}': {e}", ps.loc_of("filename")) from None
+    if img.shape[0] != img.shape[1] or not np.all(np.isfinite(img)):
+        raise SceneError(f"infinite: '{fname}' must be a square image of finite values (pbrt-v4's equal-area map)",
+                         ps.loc_of("filename"))
+    scale = ps.float("scale", 1.0)
+    if scale < 0:
+        raise SceneError("a light's scale must be non-negative", ps.loc_of("scale"))
+    latlong = equal_area_to_latlong(img)
+    warn(f"infinite: the equal-area map '{fname}' ({img.shape[1]}x{img.shape[0]}) is resampled to a "
+         f"latitude-longitude map ({latlong.shape[1]}x{latlong.shape[0]}, each texel pbrt-v4's nearest)", ps.loc)
+    rot = np.eye(4)
+    rot[:3, :3] = ctm[:3, :3] / np.linalg.norm(ctm[:3, :3], axis=0, keepdims=True)
+    ps.warn_unused()
+    return {"type": "envmap", "data": latlong, "scale": scale * ratio, "to_world": rot, "_loc": ps.loc}
+
+
+def equal_area_sphere_to_square(d: np.ndarray) -> np.ndarray:
+    """Clarberg's equal-area octahedral map of unit directions (N, 3) to [0, 1]^2, as pbrt-v4 uses
+    for environment maps (+z at the centre, -z at the corners)."""
+    x, y, z = np.abs(d[:, 0]), np.abs(d[:, 1]), np.abs(d[:, 2])
+    r = np.sqrt(np.maximum(0.0, 1.0 - z))
+    a, b = np.maximum(x, y), np.minimum(x, y)
+    b = np.where(a == 0, 0.0, b / np.where(a == 0, 1.0, a))
+    phi = np.arctan(b) * (2.0 / math.pi)
+    phi = np.where(x < y, 1.0 - phi, phi)
+    v = phi * r
+    u = r - v
+    neg = d[:, 2] < 0
+    u, v = np.where(neg, 1.0 - v, u), np.where(neg, 1.0 - u, v)
+    u, v = np.copysign(u, d[:, 0]), np.copysign(v, d[:, 1])
+    return np.stack([0.5 * (u + 1.0), 0.5 * (v + 1.0)], axis=1)
+
+
+def equal_area_to_latlong(img: np.ndarray) -> np.ndarray:
+    """The latitude-longitude map (2n rows, 4n columns; restir's environment frame: row 0 at +y,
+    u = phi / 2 pi with the direction (sin theta sin phi, cos theta, -sin theta cos phi)) of an
+    n x n equal-area map, each texel the nearest of the equal-area map in its direction."""
+    n = img.shape[0]
+    h, w = 2 * n, 4 * n
+    theta = math.pi * (np.arange(h) + 0.5) / h
+    phi = 2 * math.pi * (np.arange(w) + 0.5) / w
+    T, P = np.meshgrid(theta, phi, indexing="ij")
+    d = np.stack([np.sin(T) * np.sin(P), np.cos(T), -np.sin(T) * np.cos(P)], -1).reshape(-1, 3)
+    uv = equal_area_sphere_to_square(d)
+    col = np.minimum((uv[:, 0] * n).astype(int), n - 1)
+    row = np.minimum((uv[:, 1] * n).astype(int), n - 1)
+    return np.ascontiguousarray(img[row, col].reshape(h, w, 3), np.float32)
 
 
 class AreaLight:
@@ -111,13 +178,3 @@ class AreaLight:
                 raise SceneError("AreaLightSource: 'power' on a shape whose area is zero", self.loc)
             radiance = radiance * self.phi / (math.pi * area)
         return {"type": "area", "radiance": radiance, "_loc": self.loc}
-
-
-def _frame(z: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(a, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, origin
-    return m

@@ -15,8 +15,9 @@ from ..errors import SceneError, warn
 from . import spectra
 from .params import ParamSet
 
-MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "mix", "interface")
-NOT_YET = ("coatedconductor", "diffusetransmission", "measured", "hair", "subsurface")
+MATERIALS = ("diffuse", "conductor", "dielectric", "thindielectric", "coateddiffuse", "diffusetransmission", "mix",
+             "interface")
+NOT_YET = ("coatedconductor", "measured", "hair", "subsurface")
 TEXTURES = ("imagemap", "checkerboard", "constant", "scale", "mix")
 SMOOTH_ALPHA = 1e-3
 
@@ -202,6 +203,13 @@ class Materials:
                 else:
                     b = {"type": "roughdielectric", "int_ior": eta, "ext_ior": 1.0, "distribution": "ggx",
                          "alpha_u": alpha[0], "alpha_v": alpha[1]}
+        elif kind == "diffusetransmission":
+            scale = ps.float("scale", 1.0)
+            if scale < 0:
+                raise SceneError("diffusetransmission: scale must be non-negative", ps.loc_of("scale"))
+            b = {"type": "diffuse_transmission",
+                 "reflectance": _scaled(self.value(ps, "reflectance", [0.25] * 3, "spectrum"), scale, ps),
+                 "transmittance": _scaled(self.value(ps, "transmittance", [0.25] * 3, "spectrum"), scale, ps)}
         else:  # coateddiffuse
             b = self._coateddiffuse(ps)
         if bump is not None:
@@ -300,15 +308,26 @@ class Materials:
         eta = self._eta(ps)
         alpha = self._alpha(ps, isotropic=True)
         refl = self.value(ps, "reflectance", [0.5] * 3, "spectrum")
-        if True:  # once per material: each is translated once (Materials.material's cache)
-            warn("coateddiffuse (pbrt-v4's stochastic layered BSDF) is rendered as a "
-                 f"{'rough ' if alpha else ''}plastic (a {'GGX' if alpha else 'smooth'} dielectric coat of IOR "
-                 f"{eta:g} over a diffuse base, Mitsuba's model); docs/guide/pbrt.md gives the difference", ps.loc)
+        # once per material: each is translated once (Materials.material's cache)
+        warn("coateddiffuse (pbrt-v4's stochastic layered BSDF) is rendered as a "
+             f"{'rough ' if alpha else ''}plastic (a {'GGX' if alpha else 'smooth'} dielectric coat of IOR "
+             f"{eta:g} over a diffuse base, Mitsuba's model); docs/guide/pbrt.md gives the difference", ps.loc)
         b = {"type": "roughplastic" if alpha else "plastic", "int_ior": eta, "ext_ior": 1.0,
              "diffuse_reflectance": refl, "nonlinear": True}
         if alpha:
             b.update(distribution="ggx", alpha=alpha[0])
         return {"type": "twosided", "bsdf": b}
+
+
+def _scaled(v, scale: float, ps: ParamSet):
+    """A constant or an image texture times `scale` (pbrt-v4's diffusetransmission scale)."""
+    if scale == 1.0:
+        return v
+    if not isinstance(v, dict):
+        return v * scale
+    if v["type"] != "bitmap":
+        raise SceneError("diffusetransmission: a scale with a checkerboard is not supported", ps.loc_of("scale"))
+    return {**v, "texel_scale": v.get("texel_scale", 1.0) * scale}
 
 
 def mask(material: dict, opacity) -> dict:

@@ -431,7 +431,7 @@ class PbrtReader:
         ps = read_params(self.tok, f"LightSource \"{kind}\"", loc)
         if self.current_object is not None:
             raise SceneError("a LightSource inside ObjectBegin is not supported", loc)
-        self.emitters.append(lights.light_source(kind, ps, self.ctm_now("LightSource", loc), self.ratio))
+        self.emitters.append(lights.light_source(kind, ps, self.ctm_now("LightSource", loc), self.ratio, self.base_dir))
 
     def d_AreaLightSource(self, loc):
         self.world("AreaLightSource", loc)
