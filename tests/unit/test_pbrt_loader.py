@@ -208,7 +208,7 @@ def test_materials_map_onto_restirs(tmp_path):
     ('LightSource "infinite" "string filename" "sky.exr"\n', "infinite: environment map 'sky.exr' not found"),
     ('AreaLightSource "diffuse" "bool twosided" true\n', "'twosided' emitters are not supported yet"),
     ('ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n', "an animated transform"),
-    ('Attribute "shape" "float alpha" 0.5\n', r"Attribute \"shape\" \(default parameters\) is not supported"),
+    ('Attribute "camera" "float fov" 30\n', "Attribute: unknown target 'camera'"),
 ])
 def test_what_is_not_supported_is_refused_naming_it(tmp_path, text, message):
     path = write(tmp_path, CAMERA + "WorldBegin\n" + text + quad(-1, 1, -1, 1, 5))
@@ -314,3 +314,14 @@ def test_an_image_infinite_light_shines_from_its_maps_centre_along_the_lights_pl
     # the map's mean over the sphere (latitude rows weighted by their solid angle) is the source's mean
     w = np.sin(math.pi * (np.arange(64) + 0.5) / 64)[:, None]
     assert abs((scene.env_image[..., 0] * w).sum() / (w.sum() * 128) / img[..., 0].mean() - 1) < 0.05
+
+
+def test_attribute_sets_defaults_within_its_block(tmp_path):
+    path = write(tmp_path, CAMERA + "WorldBegin\nAttributeBegin\n"
+                 'Attribute "light" "rgb L" [ 2 2 2 ] "float scale" 3\n'
+                 'AreaLightSource "diffuse"\n' + quad(-1, 1, -1, 1, 5, '"normal N" [0 0 -1 0 0 -1 0 0 -1 0 0 -1]')
+                 + 'AreaLightSource "diffuse" "float scale" 1\n' + quad(-1, 1, -1, 1, 6, '"normal N" [0 0 -1 0 0 -1 0 0 -1 0 0 -1]')
+                 + "AttributeEnd\n" + 'AreaLightSource "diffuse"\n' + quad(-1, 1, -1, 1, 7, '"normal N" [0 0 -1 0 0 -1 0 0 -1 0 0 -1]'))
+    scene = restir.load_scene(path)
+    per_quad = scene.tri_emission[::2, 0]
+    assert np.allclose(per_quad, [6.0, 2.0, 1.0])  # defaults, one overridden, and none after the block

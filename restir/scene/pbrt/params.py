@@ -28,6 +28,7 @@ class ParamSet:
     def __init__(self, params: dict[str, Param], path: str, loc: str, what: str):
         self.params, self.path, self.loc, self.what = params, path, loc, what
         self.used: set[str] = set()
+        self.defaulted: set[str] = set()
 
     def loc_of(self, name: str) -> str:
         p = self.params.get(name)
@@ -134,13 +135,22 @@ class ParamSet:
         raise SceneError(f"{self.what}: spectrum '{name}' must be wavelength-value pairs, a named spectrum or a "
                          "file (spectrum files are not supported)", self.loc_of(name))
 
+    def with_defaults(self, defaults: dict) -> "ParamSet":
+        """The `Attribute` directive's parameters for this kind of directive, under its own: a
+        default is never warned about when unused (it applies to every directive of the kind)."""
+        for name, p in defaults.items():
+            if name not in self.params:
+                self.params[name] = p
+                self.defaulted.add(name)
+        return self
+
     def ignore(self, *names: str) -> None:
         """Parameters read and deliberately without effect here (their reason is in the docs)."""
         self.used.update(n for n in names if n in self.params)
 
     def warn_unused(self) -> None:
         for name in self.params:
-            if name not in self.used:
+            if name not in self.used and name not in self.defaulted:
                 warn(f"{self.what}: unused parameter '{self.params[name].type} {name}'", self.loc_of(name))
 
 

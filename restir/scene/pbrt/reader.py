@@ -17,11 +17,12 @@ from .params import ParamSet, read_params
 from .tokens import Token, Tokenizer
 
 MAX_INCLUDE_DEPTH = 32
+ATTRIBUTE_TARGETS = ("shape", "light", "material", "medium", "texture")
 OPTION_DIRECTIVES = ("Camera", "Film", "PixelFilter", "Sampler", "Integrator", "Accelerator", "ColorSpace", "Option")
 
 
 class _State:
-    __slots__ = ("ctm", "ctm_end", "active", "reverse", "material", "area_light", "medium")
+    __slots__ = ("ctm", "ctm_end", "active", "reverse", "material", "area_light", "medium", "attributes")
 
     def __init__(self):
         self.ctm = np.eye(4)
@@ -31,11 +32,13 @@ class _State:
         self.material = None       # ("named", name, loc) or ("anon", kind, ParamSet)
         self.area_light = None     # lights.AreaLight
         self.medium = False
+        self.attributes: dict[str, dict] = {}  # Attribute "target": its default parameters
 
     def copy(self) -> "_State":
         s = _State()
         s.ctm, s.ctm_end, s.active = self.ctm.copy(), self.ctm_end.copy(), self.active
         s.reverse, s.material, s.area_light, s.medium = self.reverse, self.material, self.area_light, self.medium
+        s.attributes = {k: dict(v) for k, v in self.attributes.items()}
         return s
 
 
@@ -262,9 +265,16 @@ class PbrtReader:
         self.state.ctm, self.state.ctm_end, self.state.active = old.ctm, old.ctm_end, old.active
 
     def d_Attribute(self, loc):
+        """Default parameters for the directives of one kind (shape, light, material, medium,
+        texture) until the attribute block ends; a directive's own parameters win."""
         target = self.string_arg("Attribute", loc)
-        read_params(self.tok, "Attribute", loc)
-        raise SceneError(f"Attribute \"{target}\" (default parameters) is not supported", loc)
+        if target not in ATTRIBUTE_TARGETS:
+            raise SceneError(f"Attribute: unknown target '{target}' (one of {', '.join(ATTRIBUTE_TARGETS)})", loc)
+        ps = read_params(self.tok, f"Attribute \"{target}\"", loc)
+        self.state.attributes.setdefault(target, {}).update(ps.params)
+
+    def params(self, target: str, what: str, loc: str) -> ParamSet:
+        return read_params(self.tok, what, loc).with_defaults(self.state.attributes.get(target, {}))
 
     def d_ObjectBegin(self, loc):
         name = self.string_arg("ObjectBegin", loc)
@@ -360,7 +370,7 @@ class PbrtReader:
 
     def d_MakeNamedMedium(self, loc):
         name = self.string_arg("MakeNamedMedium", loc)
-        ps = read_params(self.tok, f"MakeNamedMedium \"{name}\"", loc)
+        ps = self.params("medium", f"MakeNamedMedium \"{name}\"", loc)
         ps.ignore(*ps.params)
         self.media.add(name)
         warn(f"participating medium '{name}' is not rendered (restir has no media): the surfaces around it render "
@@ -382,18 +392,18 @@ class PbrtReader:
         name = self.string_arg("Texture", loc)
         type_ = self.string_arg("Texture", loc)
         cls = self.string_arg("Texture", loc)
-        ps = read_params(self.tok, f"Texture \"{name}\"", loc)
+        ps = self.params("texture", f"Texture \"{name}\"", loc)
         self.materials.define_texture(Texture(name, type_, cls, ps, self.base_dir))
 
     def d_Material(self, loc):
         self.world("Material", loc)
         kind = self.string_arg("Material", loc)
-        self.state.material = ("anon", kind, read_params(self.tok, f"Material \"{kind}\"", loc))
+        self.state.material = ("anon", kind, self.params("material", f"Material \"{kind}\"", loc))
 
     def d_MakeNamedMaterial(self, loc):
         self.world("MakeNamedMaterial", loc)
         name = self.string_arg("MakeNamedMaterial", loc)
-        ps = read_params(self.tok, f"MakeNamedMaterial \"{name}\"", loc)
+        ps = self.params("material", f"MakeNamedMaterial \"{name}\"", loc)
         if name in self.named_materials:
             raise SceneError(f"named material '{name}' defined twice", loc)
         kind = ps.string("type")
@@ -428,7 +438,7 @@ class PbrtReader:
     def d_LightSource(self, loc):
         self.world("LightSource", loc)
         kind = self.string_arg("LightSource", loc)
-        ps = read_params(self.tok, f"LightSource \"{kind}\"", loc)
+        ps = self.params("light", f"LightSource \"{kind}\"", loc)
         if self.current_object is not None:
             raise SceneError("a LightSource inside ObjectBegin is not supported", loc)
         self.emitters.append(lights.light_source(kind, ps, self.ctm_now("LightSource", loc), self.ratio, self.base_dir))
@@ -436,13 +446,13 @@ class PbrtReader:
     def d_AreaLightSource(self, loc):
         self.world("AreaLightSource", loc)
         kind = self.string_arg("AreaLightSource", loc)
-        ps = read_params(self.tok, f"AreaLightSource \"{kind}\"", loc)
+        ps = self.params("light", f"AreaLightSource \"{kind}\"", loc)
         self.state.area_light = lights.AreaLight(kind, ps, self.ratio)
 
     def d_Shape(self, loc):
         self.world("Shape", loc)
         kind = self.string_arg("Shape", loc)
-        ps = read_params(self.tok, f"Shape \"{kind}\"", loc)
+        ps = self.params("shape", f"Shape \"{kind}\"", loc)
         load, object_area = shapes.read_shape(kind, ps, self.base_dir)
         alpha_tex = ps.texture("alpha")
         alpha = 1.0 if alpha_tex is not None else ps.float("alpha", 1.0)
