@@ -293,14 +293,15 @@ def part_equal_time(args, size) -> dict:
         w = int(round(h * cam.width / cam.height / 2)) * 2
         json_out = os.path.join(LOGS, f"equal_time_{name}.json")
         report = os.path.join(LOGS, f"report_{name}")
-        argv = ["compare", path if path.startswith("builtin:") else shown_path(path)]
+        shown = f"$RESTIR_PBRT_SCENES/{spec[5:]}" if spec.startswith("pbrt:") else shown_path(path)
+        argv = ["compare", path if path.startswith("builtin:") else shown]
         for m in EQUAL_TIME_METHODS:
             argv += ["--method", m]
         argv += ["--equal-time", f"{size['seconds']:g}", "--width", str(w), "--height", str(h),
                  "--reference-spp", str(size["reference_spp"]), "--warmup", str(size["warmup"]), "--seed", "0",
                  "--denoise", "--correlation-runs", "0", "--quiet", "--json", json_out, "--report", report]
         log(f"equal time: {title} {w}x{h}, {size['seconds']:g} s a method: {RESTIR} {shlex.join(argv)}")
-        code = run_cli(argv, f"equal_time_{name}.log")
+        code = run_cli([a if a != shown else path for a in argv], f"equal_time_{name}.log")
         if code != 0:
             raise SystemExit(f"restir compare failed on {title} (exit {code}); see {LOGS}/equal_time_{name}.log")
         with open(json_out) as f:

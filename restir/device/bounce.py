@@ -18,7 +18,7 @@ from .lights import env_eval, env_pdf, triangle_emission, triangle_light_pdf
 from .path_steps import LightConnection, Scatter, connect_to_light, scatter
 from .rng import rng_uniform, rng_uniform2
 from .sampling import Frame, frame_from_normal, to_local
-from .scene_device import SceneDevice, material_index_at, textured_material
+from .scene_device import SceneDevice, material_index_at, textured_material_of
 from .streams import DIM_BSDF_DIR, DIM_BSDF_LOBE, DIM_LIGHT_POINT, DIM_LIGHT_SELECT, DIMS_PER_BOUNCE
 from .types import ENV_NONE
 
@@ -47,10 +47,11 @@ def material_at(scene: SceneDevice, hit: SurfaceHit, frame: Frame) -> Material:
     """The material a BSDF at the hit is evaluated with, in `frame` (shading_frame's): textures
     resolved (scene_device.textured_material) and, on a bump-mapped surface, the bump map's terms
     for bsdf.py (the unperturbed normal in the tilted frame, the shadowing alpha^2)."""
-    m = textured_material(scene, hit.tri, hit.uv)
+    i = material_index_at(scene, hit.tri, hit.uv)
+    m = textured_material_of(scene, i, hit.uv)
     if m.bumped != 0:  # set in the scene's record of a bump-mapped material
         m.bump_n0 = to_local(frame, hit.ns)
-        m.bump_alpha2 = shadowing_alpha2(m.bump_n0, scene.material_bump[material_index_at(scene, hit.tri, hit.uv)].shadowing)
+        m.bump_alpha2 = shadowing_alpha2(m.bump_n0, scene.material_bump[i].shadowing)
     return m
 
 

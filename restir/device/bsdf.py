@@ -276,21 +276,34 @@ def has_lobe_parts(mat: Material) -> bool:
     return mat.kind == MAT_ROUGHPLASTIC or mat.kind == MAT_METALLIC_ROUGHNESS
 
 
+@wp.func
+def kind_eval_parts(mat: Material, wi: wp.vec3, wo: wp.vec3, lobes: int, wo_in: wp.vec3) -> wp.vec3:
+    """A `parts` kind's eval restricted to `lobes` (wi, wo on its front), with the mask's and the
+    bump map's factors (wo_in: wo in the caller's frame). Each branch returns (see kind_sample)."""
+    if mat.kind == MAT_ROUGHPLASTIC:
+        return roughplastic_eval_parts(mat, wi, wo, lobes) * mat.opacity * lobe_bump(mat, wo_in)
+    return metallic_roughness_eval_parts(mat, wi, wo, lobes) * mat.opacity * lobe_bump(mat, wo_in)
+
+
+@wp.func
+def kind_pdf_parts(mat: Material, wi: wp.vec3, wo: wp.vec3, lobes: int) -> float:
+    if mat.kind == MAT_ROUGHPLASTIC:
+        return roughplastic_pdf_parts(mat, wi, wo, lobes)
+    return metallic_roughness_pdf_parts(mat, wi, wo, lobes)
+
+
+@wp.func
+def lobe_bump(mat: Material, wo_in: wp.vec3) -> float:
+    if mat.bumped != 0:
+        return bump_factor(mat.bump_n0, mat.bump_alpha2, wo_in)
+    return 1.0
+
+
 @wp.func(inline=False)
 def bsdf_eval_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) -> wp.vec3:
     """bsdf_eval restricted to the lobes in the mask `lobes` (delta lobes evaluate to 0 anyway)."""
     if has_lobe_parts(mat):
-        wi = to_front(mat, wi_in, wi_in)
-        wo = to_front(mat, wi_in, wo_in)
-        f = wp.vec3(0.0)
-        if mat.kind == MAT_ROUGHPLASTIC:
-            f = roughplastic_eval_parts(mat, wi, wo, lobes)
-        else:
-            f = metallic_roughness_eval_parts(mat, wi, wo, lobes)
-        f = f * mat.opacity
-        if mat.bumped != 0:
-            f = f * bump_factor(mat.bump_n0, mat.bump_alpha2, wo_in)
-        return f
+        return kind_eval_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes, wo_in)
     if smooth_lobe(mat, wi_in, wo_in) & lobes == 0:
         return wp.vec3(0.0)
     return bsdf_eval(mat, wi_in, wo_in)
@@ -301,14 +314,7 @@ def bsdf_pdf_lobes(mat: Material, wi_in: wp.vec3, wo_in: wp.vec3, lobes: int) ->
     """bsdf_pdf restricted to the lobes in `lobes`: the density of choosing one of them and then
     sampling wo (the single-lobe pdf of ReSTIR PT's lobe-separated path BSDF)."""
     if has_lobe_parts(mat):
-        wi = to_front(mat, wi_in, wi_in)
-        wo = to_front(mat, wi_in, wo_in)
-        p = 0.0
-        if mat.kind == MAT_ROUGHPLASTIC:
-            p = roughplastic_pdf_parts(mat, wi, wo, lobes)
-        else:
-            p = metallic_roughness_pdf_parts(mat, wi, wo, lobes)
-        p = p * mat.opacity
+        p = kind_pdf_parts(mat, to_front(mat, wi_in, wi_in), to_front(mat, wi_in, wo_in), lobes) * mat.opacity
         if mat.bumped != 0:
             if bump_factor(mat.bump_n0, 0.0, wo_in) == 0.0:
                 p = 0.0

@@ -38,6 +38,7 @@ class SceneDevice:
     # per material: a mixture's two materials (-1, -1 for any other) and its constant amount
     material_mix: wp.array(dtype=wp.vec2i)
     material_mix_amount: wp.array(dtype=float)
+    num_mixtures: int                     # 0: material_index_at is the triangle's material, read no further
     material_bump: wp.array(dtype=Bump)   # per material, its bump map (texture -1: none)
     # The lights other than the environment, chosen in proportion to power by one Walker alias
     # table: light_tri holds the emissive triangles first (num_tri_lights of them), then the delta
@@ -89,6 +90,8 @@ def material_index_at(scene: SceneDevice, tri: int, uv: wp.vec2) -> int:
     path loop, shift and target function sees the same material there; averaged over a pixel's
     points the choice is the blend (1 - amount) f_a + amount f_b."""
     i = scene.tri_material[tri]
+    if scene.num_mixtures == 0:
+        return i
     mix = scene.material_mix[i]
     if mix[0] < 0:
         return i
@@ -109,7 +112,12 @@ def textured_material(scene: SceneDevice, tri: int, uv: wp.vec2) -> Material:
     are read (a BSDF sees constants), so a parameter becomes texturable here and in the loader
     (scene.py `spectrum`), not in every material kind. What a BSDF is evaluated with is
     bounce.material_at's, which adds the bump map's terms to this."""
-    i = material_index_at(scene, tri, uv)
+    return textured_material_of(scene, material_index_at(scene, tri, uv), uv)
+
+
+@wp.func
+def textured_material_of(scene: SceneDevice, i: int, uv: wp.vec2) -> Material:
+    """Material i with its textured parameters resolved at uv (textured_material, the index known)."""
     m = scene.materials[i]
     tex = scene.material_textures[i]
     m.reflectance = texture_or_constant(scene, tex[0], uv, m.reflectance)

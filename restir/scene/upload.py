@@ -133,6 +133,7 @@ class DeviceScene:
         s.material_mix = self._arr(np.array([m.mix if m.mix is not None else (-1, -1) for m in sc.materials],
                                             np.int32).reshape(-1, 2), wp.vec2i)
         s.material_mix_amount = self._arr(np.array([m.mix_amount for m in sc.materials], np.float32), float)
+        s.num_mixtures = int(sum(m.mix is not None for m in sc.materials))
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
 
         # one alias table over the emissive triangles, then the delta lights, by power
