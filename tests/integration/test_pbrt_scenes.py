@@ -1,7 +1,6 @@
 """The ReSTIR field's pbrt-v4 scenes (slow tier; a checkout of w3ntao/pbrt-minus-scenes in
 $RESTIR_PBRT_SCENES): the Crown renders with every method, and Modern Hall's pbrt-v4 file
 renders as the Tungsten render beside it and as its Mitsuba file."""
-import os
 import warnings
 
 import numpy as np
