@@ -7,7 +7,6 @@ references are {'type': 'ref', 'id': ...}. Objects with an id are also collected
 import math
 import os
 import re
-import stat
 import xml.parsers.expat
 
 import numpy as np
@@ -15,6 +14,7 @@ import numpy as np
 from .. import limits
 from . import transforms, upgrade
 from .errors import SceneError, warn
+from .scene_file import read_scene_file
 
 OBJECT_TAGS = {"bsdf", "shape", "emitter", "sensor", "film", "sampler", "integrator", "rfilter", "texture"}
 PARAM_TAGS = {"float", "integer", "boolean", "string", "rgb", "spectrum", "point", "vector", "transform", "ref"}
@@ -29,22 +29,7 @@ class _Node:
 
 
 def _parse_xml(path: str) -> _Node:
-    # a device (/dev/zero), a FIFO or a folder is refused before it is opened: reading one would
-    # not end, or block
-    try:
-        st = os.stat(path)
-    except OSError as e:
-        raise SceneError(f"cannot read scene file: {e.strerror}", path) from None
-    if not stat.S_ISREG(st.st_mode):
-        raise SceneError("the scene is not a regular file (a folder, device or pipe)", path)
-    if st.st_size > limits.MAX_SCENE_FILE_BYTES:
-        raise SceneError(f"the scene file is {st.st_size >> 20} MiB: at most {limits.MAX_SCENE_FILE_BYTES >> 20} MiB "
-                         "(meshes and images belong in files of their own)", path)
-    try:
-        with open(path, "rb") as f:
-            data = f.read(limits.MAX_SCENE_FILE_BYTES + 1)
-    except OSError as e:
-        raise SceneError(f"cannot read scene file: {e.strerror}", path) from None
+    data = read_scene_file(path)
     parser = xml.parsers.expat.ParserCreate()
     stack: list[_Node] = []
     root: list[_Node] = []

@@ -9,11 +9,11 @@ left, so its world transform is the node's times diag(-1, 1, -1). Texture coordi
 (0, 0) at the image's top-left corner, as restir's: they are used as they are.
 """
 import math
-import os
 
 import numpy as np
 
 from ..errors import SceneError, warn
+from ..scene_file import check_scene_file
 from ..shapes import TriMesh
 from ..transforms import frame_along
 from .accessors import Buffers
@@ -30,8 +30,7 @@ def load_gltf(path: str, camera: str | None = None) -> dict:
         import pygltflib
     except ImportError:
         raise SceneError("reading glTF needs the package pygltflib (pip install pygltflib)", path) from None
-    if not os.path.isfile(path):
-        raise SceneError("cannot read scene file: not a regular file or missing", path)
+    check_scene_file(path)
     try:
         gltf = pygltflib.GLTF2().load(path)
     except Exception as e:  # the library raises many types for malformed JSON or GLB
@@ -71,7 +70,7 @@ class _Reader:
         self.shapes: list[dict] = []
         self.emitters: list[dict] = []
         self.cameras: list[tuple] = []   # (name, camera index, world matrix)
-        self.bounds: list[np.ndarray] = []
+        self.positions: list[tuple] = []  # (POSITION accessor, node matrix, name): the default view's bounds
 
     def read(self) -> dict:
         g = self.gltf
@@ -143,9 +142,10 @@ class _Reader:
             attrs = prim.attributes
             if attrs.POSITION is None:
                 raise SceneError(f"{what} has no POSITION", self.path)
+            if attrs.COLOR_0 is not None:
+                warn(f"{what}: its vertex colours (COLOR_0) are not applied to the base colour", self.path)
             bsdf, emission, emission_tex = self.materials.material(prim.material)
-            p = self.buffers.accessor(attrs.POSITION, what).astype(np.float64)
-            self.bounds.append(np.array([(m[:3, :3] @ p.min(0)) + m[:3, 3], (m[:3, :3] @ p.max(0)) + m[:3, 3]]))
+            self.positions.append((attrs.POSITION, m, what))
             shape = {"type": "triangles", "load": self._loader(what, prim, mode, m, emission_tex, emission),
                      "bsdf": bsdf, "_loc": self.path}
             if np.any(emission > 0):
@@ -268,8 +268,12 @@ class _Reader:
     def default_sensor(self) -> dict:
         """No camera: 45 degrees vertically, looking down -Z at the centre of the scene's bounding
         box from where the box's bounding sphere just fills the view (times 1.1), 16:9."""
-        b = np.array(self.bounds)
-        lo, hi = b[:, 0].min(0), b[:, 1].max(0)
+        corners = []
+        for acc, m, what in self.positions:
+            p = self.buffers.accessor(acc, what)
+            corners.append(np.stack([p.min(0), p.max(0)]) @ m[:3, :3].T + m[:3, 3])
+        b = np.concatenate(corners)
+        lo, hi = b.min(0), b.max(0)
         centre, radius = 0.5 * (lo + hi), max(0.5 * float(np.linalg.norm(hi - lo)), 1e-6)
         dist = 1.1 * radius / math.sin(DEFAULT_YFOV / 2)
         to_world = np.diag([-1.0, 1.0, -1.0, 1.0])

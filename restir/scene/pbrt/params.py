@@ -1,8 +1,6 @@
 """A pbrt-v4 directive's parameter list (`"float fov" [ 45 ]`): typed access, and a warning for
 every parameter the loader never read (a misspelt name would otherwise be ignored in silence).
 """
-import math
-
 import numpy as np
 
 from ..errors import SceneError, warn
@@ -203,11 +201,12 @@ def _values(tok: Tokenizer, type_: str, name: str, what: str):
     elif type_ in NUMBER_TYPES or (type_ == "spectrum" and raw and not raw[0].quoted):
         if any(t.quoted for t in raw):
             raise SceneError(f"{what}: '{type_} {name}' takes numbers, not strings", loc)
-        try:
-            values = np.array([float(t.text) for t in raw], np.float64)
-        except ValueError:
-            bad = next(t.text for t in raw if not _is_number(t.text))
-            raise SceneError(f"{what}: '{type_} {name}': '{bad}' is not a number", loc) from None
+        values = np.empty(len(raw), np.float64)
+        for i, t in enumerate(raw):
+            try:
+                values[i] = float(t.text)
+            except ValueError:
+                raise SceneError(f"{what}: '{type_} {name}': '{t.text}' is not a number", loc) from None
     elif type_ == "bool":
         values = []
         for t in raw:
@@ -227,9 +226,3 @@ def _values(tok: Tokenizer, type_: str, name: str, what: str):
         raise SceneError(f"{what}: parameter '{name}' has no value", loc)
     return values
 
-
-def _is_number(s: str) -> bool:
-    try:
-        return math.isfinite(float(s)) or True
-    except ValueError:
-        return False

@@ -18,7 +18,6 @@ from .tokens import Token, Tokenizer
 
 MAX_INCLUDE_DEPTH = 32
 ATTRIBUTE_TARGETS = ("shape", "light", "material", "medium", "texture")
-OPTION_DIRECTIVES = ("Camera", "Film", "PixelFilter", "Sampler", "Integrator", "Accelerator", "ColorSpace", "Option")
 
 
 class _State:

@@ -21,8 +21,6 @@ from .params import ParamSet
 
 SUPPORTED = ("trianglemesh", "plymesh", "sphere", "disk", "bilinearmesh")
 NOT_SUPPORTED = ("cylinder", "curve", "loopsubdiv", "cone", "paraboloid", "hyperboloid", "nurbs")
-# parameters of pbrt-v4's shapes that change nothing in restir's image (said in docs/guide/pbrt.md)
-NO_EFFECT = ("emissionfilename",)
 
 
 def read_shape(kind: str, ps: ParamSet, base_dir: str):

@@ -6,14 +6,12 @@ A bracketed list of numbers is read in one step (numpy's parser over the text be
 brackets): meshes written inline hold most of a file's tokens, and reading them one by one was
 the bulk of a load.
 """
-import os
 import re
-import stat
 
 import numpy as np
 
-from ... import limits
 from ..errors import SceneError
+from ..scene_file import read_scene_file
 
 _TOKEN = re.compile(r'"(?:[^"\\\n]|\\.)*"|\[|\]|[^\s\[\]"#]+|#[^\n]*|"')
 _ESCAPES = {"n": "\n", "t": "\t", "b": "\b", "f": "\f", "r": "\r", "\\": "\\", "'": "'", '"': '"'}
@@ -27,21 +25,8 @@ class Token:
 
 
 def read_text(path: str) -> str:
-    """The file's text, refusing what is not a regular file or is too large (as the XML loader)."""
-    try:
-        st = os.stat(path)
-    except OSError as e:
-        raise SceneError(f"cannot read scene file: {e.strerror}", path) from None
-    if not stat.S_ISREG(st.st_mode):
-        raise SceneError("the scene is not a regular file (a folder, device or pipe)", path)
-    if st.st_size > limits.MAX_SCENE_FILE_BYTES:
-        raise SceneError(f"the scene file is {st.st_size >> 20} MiB: at most {limits.MAX_SCENE_FILE_BYTES >> 20} MiB",
-                         path)
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        raise SceneError(f"cannot read scene file: {e.strerror}", path) from None
+    """The file's text (scene_file.read_scene_file's checks first)."""
+    data = read_scene_file(path)
     if data.startswith(b"\x1f\x8b"):
         raise SceneError("gzip-compressed pbrt files are not supported: decompress it first", path)
     try:
