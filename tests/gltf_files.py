@@ -84,6 +84,8 @@ def _material(m: dict) -> dict:
         baseColorFactor=pbr.get("baseColorFactor", [1, 1, 1, 1]), metallicFactor=pbr.get("metallicFactor", 1.0),
         roughnessFactor=pbr.get("roughnessFactor", 1.0),
         baseColorTexture=g.TextureInfo(**pbr["baseColorTexture"]) if "baseColorTexture" in pbr else None)}
+    if "normalTexture" in m:
+        out["normalTexture"] = g.NormalMaterialTexture(**m.pop("normalTexture"))
     out.update(m)
     return out
 

@@ -173,6 +173,8 @@ MATRIX_SCENES = {
     # tests/data/feature_scene.py: the pbrt-v4 and glTF readers' materials (metallic-roughness, a
     # textured roughness, a per-point mixture)
     "materials": (functools.partial(feature_scene_named, "materials"), 5, 0.06, 64, 8),
+    # tests/data/feature_scene.py: normal maps (five BSDFs, mirrored uvs) and a two-sided emitter
+    "normalmaps-twosided": (functools.partial(feature_scene_named, "normalmaps-twosided"), 5, 0.06, 64, 8),
 }
 # Scenes that get some of each matrix's configurations, named in the matrix files (the bump maps:
 # the cells whose shifts cross a tilted, wi-dependent shading frame; the lights and lens scenes:
@@ -180,8 +182,8 @@ MATRIX_SCENES = {
 # rest get every one.
 PARTIAL_MATRIX_SCENES = ("bumps", "masks")
 LIGHT_MATRIX_SCENES = ("delta-lights", "delta-only", "sun", "thinlens")
-# the materials scene gets the light scenes' cells (every stage and shift, the defaults still and moving)
-MATERIAL_MATRIX_SCENES = ("materials",)
+# the materials and normal-map scenes get the light scenes' cells (every stage and shift, the defaults still and moving)
+MATERIAL_MATRIX_SCENES = ("materials", "normalmaps-twosided")
 FULL_MATRIX_SCENES = [n for n in MATRIX_SCENES
                       if n not in PARTIAL_MATRIX_SCENES + LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES]
 # The path tracer's spp per frame in the references: 16, and 48 on veach-mis, whose MDB the

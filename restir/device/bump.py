@@ -1,12 +1,19 @@
-"""Bump mapping as Mitsuba 3's `bumpmap` BSDF does it: a texture's luminance is a height field
-over the surface's uv, and its gradient tilts the shading normal; the wrapped BSDF is evaluated
-in the tilted frame, with two more factors that make it a BSDF of the unperturbed surface.
+"""Bump and normal mapping as Mitsuba 3's `bumpmap` and `normalmap` BSDFs do them: a texture
+tilts the shading normal, and the wrapped BSDF is evaluated in the tilted frame, with two more
+factors that make it a BSDF of the unperturbed surface.
 
-- `bump_normal`: the tilted normal n at a hit. With dp/du, dp/dv the triangle's tangents (from
-  its corner uvs; the Duff basis of ng where the uvs are degenerate) and g = scale * grad h,
-  dp/du' = dp/du + ns (g_u - ns . dp/du), likewise dp/dv', and n = normalize(dp/du' x dp/dv'),
-  turned to ng's side. `flip_invalid_normals` (Mitsuba's default): where wi lies on different
-  sides of ns and n, n is mirrored about ns, so the camera side always sees the front.
+- `bump_normal`: the tilted normal n at a hit, from dp/du, dp/dv, the triangle's tangents (from
+  its corner uvs; the Duff basis of ng where the uvs are degenerate).
+  - A bump map (`bumpmap`): the texture's luminance is a height field h over the uv; with
+    g = scale * grad h, dp/du' = dp/du + ns (g_u - ns . dp/du), likewise dp/dv', and
+    n = normalize(dp/du' x dp/dv'), turned to ng's side.
+  - A normal map (`normalmap`): the texture's RGB c is a normal 2c - 1 in the frame (s, t, ns),
+    s = dp/du made orthogonal to ns and t = ns x s, as Mitsuba 3 and pbrt-v4 read it; `strength`
+    multiplies its first two components (glTF's normalTexture.scale). With `uv_handed` (glTF's
+    tangent space, MikkTSpace's bitangent sign) t turns to point against dp/dv, toward the
+    image's top, on triangles whose uv mapping is mirrored.
+  `flip_invalid_normals` (Mitsuba's default): where wi lies on different sides of ns and n, n is
+  mirrored about ns, so the camera side always sees the front.
 - `bump_factor`: directions wo on different sides of ns and n carry nothing (Mitsuba's
   `cos_theta(wo) * cos_theta(perturbed wo) > 0`), and with `use_shadowing_function` (default)
   the rest is weighted by Estevez et al.'s terminator shadowing, 2 / (1 + sqrt(1 + a2 tan^2)),
@@ -20,14 +27,19 @@ one BSDF: the frame is a function of the hit and wi alone (bounce.shading_frame)
 import warp as wp
 
 from .sampling import frame_from_normal
-from .textures import Texture, texture_grad1
+from .textures import Texture, texture_eval, texture_grad1
+
+PERTURB_HEIGHT = wp.constant(0)  # Bump.kind: a bump map's height field
+PERTURB_NORMAL = wp.constant(1)  # a normal map's tangent-space normals
 
 
 @wp.struct
 class Bump:
-    """A material's bump map (SceneDevice.material_bump, one per material)."""
-    texture: int        # the height texture; -1: not bump-mapped
-    scale: float        # Mitsuba's `scale`: heights are multiplied by it
+    """A material's bump or normal map (SceneDevice.material_bump, one per material)."""
+    texture: int        # the height or normal texture; -1: not perturbed
+    kind: int           # PERTURB_HEIGHT or PERTURB_NORMAL
+    scale: float        # a bump map's `scale` (heights are multiplied by it); a normal map's strength
+    uv_handed: int      # a normal map's bitangent follows the uv mapping's orientation (glTF)
     flip_invalid: int   # Mitsuba's `flip_invalid_normals`
     shadowing: int      # Mitsuba's `use_shadowing_function`
 
@@ -55,19 +67,39 @@ def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2)
         f = frame_from_normal(ng)
         dp_du = f.s
         dp_dv = f.t
-    g = b.scale * texture_grad1(textures, texels, b.texture, uv)
-    du = dp_du + ns * (g[0] - wp.dot(ns, dp_du))
-    dv = dp_dv + ns * (g[1] - wp.dot(ns, dp_dv))
-    c = wp.cross(du, dv)
-    lc = wp.length(c)
-    if lc <= 0.0:
-        return ns
-    n = c / lc
-    if wp.dot(ng, n) < 0.0:
-        n = -n
+    n = wp.vec3(0.0)
+    if b.kind == PERTURB_NORMAL:
+        n = normal_map_normal(textures, texels, b, uv, ns, dp_du, dp_dv)
+    else:
+        g = b.scale * texture_grad1(textures, texels, b.texture, uv)
+        du = dp_du + ns * (g[0] - wp.dot(ns, dp_du))
+        dv = dp_dv + ns * (g[1] - wp.dot(ns, dp_dv))
+        n = wp.cross(du, dv)
+        if wp.dot(ng, n) < 0.0:
+            n = -n
     if b.flip_invalid != 0 and wp.dot(wi, ns) * wp.dot(wi, n) <= 0.0:
         n = 2.0 * wp.dot(n, ns) * ns - n
-    return n
+    ln = wp.length(n)
+    if not (ln > 0.0 and ln < 1.0e30):  # zero, overflowed or NaN: Mitsuba keeps the shading normal
+        return ns
+    return n / ln
+
+
+@wp.func
+def normal_map_normal(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), b: Bump, uv: wp.vec2,
+                      ns: wp.vec3, dp_du: wp.vec3, dp_dv: wp.vec3) -> wp.vec3:
+    """A normal map's (unnormalized) normal in world space: 2c - 1 in the frame (s, t, ns)."""
+    c = texture_eval(textures, texels, b.texture, uv)
+    s = dp_du - ns * wp.dot(ns, dp_du)
+    ls = wp.length(s)
+    if ls > 0.0:
+        s = s / ls
+    else:  # dp/du along ns: any tangent (Mitsuba's fallback is as arbitrary)
+        s = frame_from_normal(ns).s
+    t = wp.cross(ns, s)
+    if b.uv_handed != 0 and wp.dot(t, dp_dv) > 0.0:
+        t = -t
+    return (b.scale * (2.0 * c[0] - 1.0)) * s + (b.scale * (2.0 * c[1] - 1.0)) * t + (2.0 * c[2] - 1.0) * ns
 
 
 @wp.func

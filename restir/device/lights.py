@@ -146,9 +146,13 @@ def sample_env(scene: SceneDevice, u: wp.vec2) -> LightSample:
 # ----------------------------------------------------------------------------- area emitters
 @wp.func
 def triangle_emission(scene: SceneDevice, tri: int, ns: wp.vec3, w_out: wp.vec3) -> wp.vec3:
-    """Radiance leaving emissive triangle `tri` toward w_out (front side of the shading normal)."""
+    """Radiance leaving emissive triangle `tri` toward w_out: on the front side of the shading
+    normal, or on either side of a two-sided emitter."""
     if wp.dot(ns, w_out) <= 0.0:
-        return wp.vec3(0.0)
+        if scene.num_twosided_emitters == 0:
+            return wp.vec3(0.0)
+        if scene.tri_emit_twosided[tri] == 0:
+            return wp.vec3(0.0)
     return scene.tri_emission[tri]
 
 

@@ -29,6 +29,10 @@ class SceneDevice:
     tri_smooth: wp.array(dtype=wp.int32)  # 1: interpolate `normals`; 0: flat (geometric) shading
     tri_material: wp.array(dtype=wp.int32)
     tri_emission: wp.array(dtype=wp.vec3)  # area-emitter radiance (front side), 0 if not emissive
+    # 1: the triangle's radiance leaves both sides (read only where num_twosided_emitters > 0;
+    # one element when there are none)
+    tri_emit_twosided: wp.array(dtype=wp.int32)
+    num_twosided_emitters: int
     tri_light_pdf: wp.array(dtype=float)   # P(select triangle) / area: NEE density in area measure
     materials: wp.array(dtype=Material)
     # per material, the texture index of reflectance, specular_reflectance, specular_transmittance,

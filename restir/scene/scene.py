@@ -15,7 +15,7 @@ from .transforms import transform_normals, transform_points
 
 KINDS = {
     "bsdf": {"diffuse", "conductor", "roughconductor", "dielectric", "thindielectric", "roughdielectric", "plastic",
-             "roughplastic", "twosided", "bumpmap", "mask", "mixture", "metallic_roughness",
+             "roughplastic", "twosided", "bumpmap", "normalmap", "mask", "mixture", "metallic_roughness",
              "diffuse_transmission"},
     "shape": {"obj", "ply", "rectangle", "cube", "disk", "sphere", "trimesh", "triangles"},
     "emitter": {"area", "constant", "envmap", "point", "spot", "directional"},
@@ -27,6 +27,7 @@ KINDS = {
     "texture": {"bitmap", "checkerboard"},
 }
 TYPE_TO_KIND = {t: k for k, ts in KINDS.items() for t in ts}
+PERTURBING = ("bumpmap", "normalmap")  # the BSDFs that tilt their nested BSDF's shading normal (device/bump.py)
 DELTA_EMITTERS = ("point", "spot", "directional")  # emitters at a point or from one direction (delta_light)
 
 # Mitsuba's named IORs (src/render/ior.h).
@@ -50,11 +51,14 @@ TEXTURED_PARAMETERS = TEXTURED_SPECTRA + ("opacity", "roughness", "amount", "met
 
 @dataclass
 class BumpDesc:
-    """Mitsuba 3's `bumpmap` around a material (device/bump.py): its height texture's index."""
+    """Mitsuba 3's `bumpmap` or `normalmap` around a material (device/bump.py): its height or
+    normal texture's index."""
     texture: int
-    scale: float = 1.0
+    scale: float = 1.0         # a bump map's height scale; a normal map's `strength`
     flip_invalid_normals: bool = True
     use_shadowing_function: bool = True
+    kind: str = "height"       # "height" (bumpmap) or "normal" (normalmap)
+    uv_handed: bool = False    # a normal map's bitangent follows the uv mapping's orientation
 
 
 @dataclass
@@ -144,6 +148,7 @@ class Scene:
     env_image: np.ndarray | None = None
     textures: list[TextureDesc] = field(default_factory=list)
     delta_lights: list[DeltaLightDesc] = field(default_factory=list)
+    tri_emit_twosided: np.ndarray | None = None  # (T,) bool: an area emitter that emits from both sides
 
     @property
     def num_triangles(self) -> int:
@@ -154,9 +159,11 @@ class Scene:
         return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
 
     def light_power(self) -> np.ndarray:
-        """Per-triangle emitted power up to the constant pi (luminance * area)."""
+        """Per-triangle emitted power up to the constant pi (luminance * area; twice that for a
+        two-sided emitter)."""
         lum = self.tri_emission @ np.array([0.2126, 0.7152, 0.0722])
-        return np.maximum(lum, 0) * self.triangle_areas()
+        sides = 1.0 if self.tri_emit_twosided is None else 1.0 + self.tri_emit_twosided
+        return np.maximum(lum, 0) * self.triangle_areas() * sides
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         p = self.positions.reshape(-1, 3)
@@ -238,7 +245,7 @@ class _Builder:
                 self.integrator(obj)
             elif kind in ("bsdf", "texture"):
                 # declared with an id for reference; built when a shape uses it
-                if obj.get("type") == "bumpmap":
+                if obj.get("type") in PERTURBING:
                     self.bump_wrappers.append(obj)
             else:
                 raise SceneError(f"a {kind} cannot appear at the top level", obj.get("_loc"))
@@ -256,10 +263,13 @@ class _Builder:
         mat = np.concatenate([np.full(len(p[0]), p[4], np.int32) for p in self.parts])
         emis = np.concatenate([p[5] if np.ndim(p[5]) == 2 else np.tile(p[5], (len(p[0]), 1))
                                for p in self.parts]).astype(np.float32)
+        twosided = None
+        if any(p[6] for p in self.parts):
+            twosided = np.concatenate([np.full(len(p[0]), p[6], bool) for p in self.parts])
         env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
         return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
                      self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
-                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights)
+                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights, twosided)
 
     def integrator(self, obj):
         p = self.props(obj, "integrator")
@@ -376,7 +386,7 @@ class _Builder:
             mask, obj = self.mask(p)
             p = self.props(obj, "bsdf")
         bump = None
-        if p.type == "bumpmap":
+        if p.type in PERTURBING:
             bump, obj = self.bumpmap(p)
             p = self.props(obj, "bsdf")
         if p.type == "twosided":
@@ -423,25 +433,41 @@ class _Builder:
         return len(self.materials) - 1
 
     def bumpmap(self, p: Props) -> tuple[BumpDesc, dict]:
-        """Mitsuba 3's `bumpmap`: exactly one height texture and one BSDF (which may be a twosided;
-        Bitterli's scenes wrap one). Returns the bump map and the BSDF's object."""
+        """Mitsuba 3's `bumpmap` and `normalmap`: exactly one texture (a height map; a normal map,
+        its parameter `normalmap`) and one BSDF (which may be a twosided; Bitterli's scenes wrap
+        one). Returns the map and the BSDF's object."""
+        what = p.type
         kids = p.children()
         textures = [c for c in kids if self.kind_of(c) == "texture"]
         bsdfs = [c for c in kids if self.kind_of(c) == "bsdf"]
         if len(bsdfs) != 1 or len(textures) != 1 or len(kids) != 2:
-            raise SceneError("bumpmap needs exactly one nested BSDF and one texture (its height map)", p.loc)
+            map_name = "its height map" if what == "bumpmap" else "'normalmap'"
+            raise SceneError(f"{what} needs exactly one nested BSDF and one texture ({map_name})", p.loc)
         tex, inner = textures[0], bsdfs[0]
-        if inner.get("type") == "bumpmap":
-            raise SceneError("nested bumpmap BSDFs are not supported", inner.get("_loc", p.loc))
+        if inner.get("type") in PERTURBING:
+            raise SceneError("nested bumpmap and normalmap BSDFs are not supported", inner.get("_loc", p.loc))
         if tex.get("type") == "checkerboard":
-            raise SceneError("a bumpmap's height map must be a bitmap: a checkerboard has no gradient",
+            reason = "a checkerboard has no gradient" if what == "bumpmap" else "a checkerboard is not a normal map"
+            raise SceneError(f"a {what}'s {'height' if what == 'bumpmap' else 'normal'} map must be a bitmap: {reason}",
                              tex.get("_loc", p.loc))
-        b = BumpDesc(self.texture(tex), scale=p.float("scale", 1.0),
-                     flip_invalid_normals=p.bool("flip_invalid_normals", True),
-                     use_shadowing_function=p.bool("use_shadowing_function", True))
-        if self.textures[b.texture].filter == "nearest":
-            warn("bumpmap: a height map with filter_type 'nearest' has gradient 0 almost everywhere, so the "
-                 "surface renders flat (as in Mitsuba 3)", tex.get("_loc", p.loc))
+        common = dict(flip_invalid_normals=p.bool("flip_invalid_normals", True),
+                      use_shadowing_function=p.bool("use_shadowing_function", True))
+        if what == "bumpmap":
+            b = BumpDesc(self.texture(tex), scale=p.float("scale", 1.0), **common)
+            if self.textures[b.texture].filter == "nearest":
+                warn("bumpmap: a height map with filter_type 'nearest' has gradient 0 almost everywhere, so the "
+                     "surface renders flat (as in Mitsuba 3)", tex.get("_loc", p.loc))
+        else:
+            # restir's extensions, for the glTF reader: glTF's normalTexture.scale, and MikkTSpace's
+            # bitangent sign on triangles whose uv mapping is mirrored
+            b = BumpDesc(self.texture(tex), scale=p.float("strength", 1.0), kind="normal",
+                         uv_handed=p.bool("uv_handed", False), **common)
+            fname = tex.get("filename")
+            if isinstance(fname, str) and not Props(tex, self.ids).bool("raw", False) and \
+                    not fname.lower().endswith((".exr", ".hdr", ".pfm")):
+                warn(f"normalmap: '{fname}' is read as sRGB-encoded colour, as Mitsuba 3 reads a bitmap without "
+                     "raw=true; normal maps are stored linear (add <boolean name=\"raw\" value=\"true\"/>)",
+                     tex.get("_loc", p.loc))
         p.warn_unqueried()
         return b, inner
 
@@ -500,9 +526,10 @@ class _Builder:
                 continue
             for inner in Props(obj, self.ids).children():
                 if (inner.get("_kind") or TYPE_TO_KIND.get(inner.get("type"))) == "bsdf" and id(inner) in self.material_index:
-                    warn(f"this bumpmap is not applied: shapes refer to the BSDF '{inner.get('id', '?')}' inside it, "
-                         "not to the bumpmap, and get it without the bump, as in Mitsuba 3 (to apply the bump, "
-                         "give the bumpmap an id and refer to that)", obj.get("_loc"))
+                    t = obj.get("type")
+                    warn(f"this {t} is not applied: shapes refer to the BSDF '{inner.get('id', '?')}' inside it, "
+                         f"not to the {t}, and get it without the {t}, as in Mitsuba 3 (to apply it, "
+                         f"give the {t} an id and refer to that)", obj.get("_loc"))
 
     def ior(self, p: Props, name: str, default: float) -> float:
         if not p.has(name):
@@ -521,8 +548,8 @@ class _Builder:
         m = MaterialDesc(kind=t)
         if t == "twosided":
             raise SceneError("nested twosided BSDFs are not supported", p.loc)
-        if t == "bumpmap":
-            raise SceneError("a bumpmap inside a twosided is not supported: put the twosided inside the bumpmap "
+        if t in PERTURBING:
+            raise SceneError(f"a {t} inside a twosided is not supported: put the twosided inside the {t} "
                              "(as Bitterli's scenes do)", p.loc)
         if t == "mask":
             raise SceneError("a mask must be the outermost BSDF: put the twosided or bumpmap inside the mask "
@@ -756,6 +783,7 @@ class _Builder:
                 bsdf_obj["reflectance"] = np.zeros(3)
         mat = self.material(bsdf_obj)
         emission = np.zeros(3)
+        twosided = False
         if emitter_obj is not None:
             ep = self.props(emitter_obj, "emitter")
             if ep.type != "area":
@@ -763,6 +791,9 @@ class _Builder:
             emission = ep.rgb("radiance")
             if np.any(emission < 0):
                 raise SceneError("radiance must be non-negative", ep.loc)
+            # restir's extension (Mitsuba 3's area emitter is one-sided), for pbrt-v4's `twosided`
+            # area lights and glTF's double-sided emissive materials: the radiance leaves both sides
+            twosided = ep.bool("twosided", False)
             ep.warn_unqueried()
         pos = transform_points(to_world, mesh.positions.reshape(-1, 3)).reshape(-1, 3, 3)
         nrm = transform_normals(to_world, mesh.normals.reshape(-1, 3)).reshape(-1, 3, 3) if mesh.normals is not None else None
@@ -784,7 +815,7 @@ class _Builder:
             emission = np.asarray(mesh.emission, np.float64)[keep]
         p.warn_unqueried()
         if len(pos):
-            self.parts.append((pos, nrm, uvs, smooth, mat, emission))
+            self.parts.append((pos, nrm, uvs, smooth, mat, emission, twosided and bool(np.any(emission > 0))))
         else:  # legal (Mitsuba renders it as nothing) but surely not what was meant
             what = "an emitter" if np.any(emission > 0) else "a shape"
             warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)

@@ -4,7 +4,7 @@ import warp as wp
 
 from ..device.bsdf import Material
 from ..device.bsdfs.registry import MATERIAL_KINDS
-from ..device.bump import Bump
+from ..device.bump import PERTURB_HEIGHT, PERTURB_NORMAL, Bump
 from ..device.camera import Camera
 from ..device.delta_lights import DeltaLight
 from ..device.scene_device import SceneDevice, vec8i
@@ -66,11 +66,13 @@ def delta_light_struct(d) -> DeltaLight:
 
 
 def bump_struct(b) -> Bump:
-    """A material's bump map (scene.BumpDesc or None) as the device reads it (device/bump.py)."""
+    """A material's bump or normal map (scene.BumpDesc or None) as the device reads it (device/bump.py)."""
     s = Bump()
     s.texture = -1 if b is None else int(b.texture)
     if b is not None:
+        s.kind = int(PERTURB_NORMAL if b.kind == "normal" else PERTURB_HEIGHT)
         s.scale = float(b.scale)
+        s.uv_handed = int(b.uv_handed)
         s.flip_invalid = int(b.flip_invalid_normals)
         s.shadowing = int(b.use_shadowing_function)
     return s
@@ -122,6 +124,9 @@ class DeviceScene:
         s.tri_smooth = self._arr(sc.tri_smooth.astype(np.int32), wp.int32)
         s.tri_material = self._arr(sc.tri_material.astype(np.int32), wp.int32)
         s.tri_emission = self._arr(sc.tri_emission.astype(np.float32), wp.vec3)
+        twosided = sc.tri_emit_twosided
+        s.num_twosided_emitters = 0 if twosided is None else int(np.count_nonzero(twosided))
+        s.tri_emit_twosided = self._arr(np.asarray(twosided if s.num_twosided_emitters else [0], np.int32), wp.int32)
         structs = [material_struct(m, self.device) for m in sc.materials]
         self._arrays += [ms.coat_transmittance for ms in structs]
         s.materials = wp.array(structs, dtype=Material, device=self.device)

@@ -13,6 +13,11 @@
   without texture coordinates (barycentric uvs); grey (8-bit, sRGB) and coloured (luminance)
   height maps with `scale` and `to_uv`; and Bitterli's unreferenced wrapper, whose bump neither
   renderer applies;
+- `write_normal_scene`: normal maps (`normalmap`) around a twosided rough plastic floor, a diffuse
+  wall, a twosided diffuse seen from its back with flip_invalid_normals and the shadowing term
+  off, a mirror (a delta lobe), and a mesh whose uvs are mirrored on some of its triangles (Mitsuba
+  3's frame ignores the mirroring, and so does restir's without `uv_handed`); raw 8-bit maps,
+  with `to_uv`; with a two-sided emitting panel (restir's extension), for the matrices;
 - `write_mask_scene`: opacity masks (`mask`) as Bitterli's scenes use them and beyond: a leaf
   whose one coloured bitmap is both its reflectance and (by luminance) its opacity (the living
   room's plant), a constant opacity under the light (the kitchen's blinds: light reaches the floor
@@ -268,6 +273,114 @@ def write_bump_scene(directory: str) -> str:
     return path
 
 
+MIRROR = '<bsdf type="conductor"><rgb name="eta" value="0.2, 0.92, 1.1"/><rgb name="k" value="3.9, 2.45, 2.14"/></bsdf>'
+
+
+def _normal_map(tex: str, extra: str = "") -> str:
+    return (f'<texture name="normalmap" type="bitmap"><string name="filename" value="{tex}"/>'
+            f'<boolean name="raw" value="true"/>{extra}</texture>')
+
+
+NORMAL_SCENE = _header("55", "0.3, 1.7, -4", "0, 0.6, 0") + f"""    <shape type="rectangle">
+        <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="normalmap">{_normal_map("tiles_n.png", '<transform name="to_uv"><scale value="2"/></transform>')}
+            <bsdf type="twosided"><bsdf type="roughplastic"><float name="alpha" value="0.2"/>
+                <string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.5, 0.45, 0.4"/>
+            </bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="3" y="1.5"/><rotate y="1" angle="180"/><translate y="1.5" z="2"/></transform>
+        <bsdf type="normalmap">{_normal_map("waves_n.png")}
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.55"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="1.5" y="1.5"/><rotate y="1" angle="-90"/><translate x="-2.2" y="1.5"/></transform>
+        <bsdf type="normalmap">{_normal_map("waves_n.png")}
+            <boolean name="flip_invalid_normals" value="false"/><boolean name="use_shadowing_function" value="false"/>
+            <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.5, 0.7"/></bsdf></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.6" y="0.5"/><rotate y="1" angle="200"/><translate x="1.3" y="0.8" z="0.5"/></transform>
+        <bsdf type="normalmap">{_normal_map("tiles_n.png")}
+            {MIRROR}
+        </bsdf>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="tent_uv.obj"/>
+        <transform name="to_world"><scale value="0.5"/><translate x="-0.8" y="0.01" z="-0.4"/></transform>
+        <bsdf type="normalmap">{_normal_map("waves_n.png")}
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.6"/><rotate x="1" angle="90"/><translate x="0.5" y="3" z="-0.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="9, 8, 7"/></emitter>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="0.1, 0.12, 0.15"/></emitter>
+</scene>
+"""
+
+# the tent again, with texture coordinates: two faces mapped as the image stands, two mirrored
+TENT_UV_OBJ = TENT_OBJ.split("f ")[0] + """vt 0 0
+vt 1 0
+vt 0.5 1
+f 1/1 5/3 2/2
+f 2/2 5/3 3/1
+f 3/1 5/3 4/2
+f 4/2 5/3 1/1
+"""
+
+
+def _encode_normals(n: np.ndarray) -> np.ndarray:
+    """Unit normals (H, W, 3) as an 8-bit normal map, (n + 1) / 2."""
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.clip(np.round((n + 1) * 127.5), 0, 255).astype(np.uint8)
+
+
+# a panel that lights both ways (restir's `twosided` area emitter: pbrt-v4's two-sided area lights,
+# glTF's double-sided emissive materials), standing between the camera and the back wall
+TWOSIDED_PANEL = """    <shape type="rectangle">
+        <transform name="to_world"><scale x="0.35" y="0.5"/><rotate y="1" angle="150"/><translate x="0.6" y="0.7" z="1.1"/></transform>
+        <emitter type="area"><rgb name="radiance" value="3, 4, 6"/><boolean name="twosided" value="true"/></emitter>
+    </shape>
+"""
+
+
+def write_normal_scene(directory: str, twosided_panel: bool = False) -> str:
+    """The normal-map scene; with `twosided_panel`, also TWOSIDED_PANEL (for the matrices: restir's
+    own emitter, so no Mitsuba 3 reference)."""
+    from PIL import Image
+
+    os.makedirs(directory, exist_ok=True)
+    y, x = (np.mgrid[0:32, 0:32] + 0.5) / 8.0
+    fx, fy = x - np.floor(x), y - np.floor(y)  # 8x8-texel tiles, bevelled toward their grout
+    gx = np.where(fx < 0.2, -1.0, np.where(fx > 0.8, 1.0, 0.0))
+    gy = np.where(fy < 0.2, -1.0, np.where(fy > 0.8, 1.0, 0.0))
+    tiles = np.stack([0.8 * gx, 0.8 * gy, np.ones_like(gx)], -1)
+    Image.fromarray(_encode_normals(tiles)).save(os.path.join(directory, "tiles_n.png"))
+    v, u = (np.mgrid[0:24, 0:40] + 0.5) / np.array([24.0, 40.0])[:, None, None]
+    waves = np.stack([0.6 * np.sin(2 * np.pi * (3 * u + v)), 0.4 * np.cos(2 * np.pi * 2 * v), np.ones_like(u)], -1)
+    Image.fromarray(_encode_normals(waves)).save(os.path.join(directory, "waves_n.png"))
+    with open(os.path.join(directory, "tent_uv.obj"), "w") as f:
+        f.write(TENT_UV_OBJ)
+    path = os.path.join(directory, "scene.xml")
+    text = NORMAL_SCENE
+    if twosided_panel:
+        # the mirror made rough: through the smooth one the tiles' bevels focus the light into
+        # caustics that the path tracer's own 1-spp runs resolve only in hundreds of runs (at two
+        # pixels: batch skewness 4-6, 64 runs' mean 35% under 512 runs'), which a cell's K of 64
+        # cannot judge; smooth mirrors under normal maps are in the Mitsuba 3 comparison
+        text = text.replace(MIRROR, '<bsdf type="roughconductor"><string name="distribution" value="ggx"/>'
+                            '<float name="alpha" value="0.2"/>' + MIRROR[len('<bsdf type="conductor">'):])
+        text = text.replace("</scene>", TWOSIDED_PANEL + "</scene>")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
 MASK_SCENE = _header("55", "0.2, 1.4, -4", "0, 0.7, 0") + f"""    <shape type="rectangle">
         <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.25, 0.4, 0.6"/></bsdf>
@@ -446,6 +559,8 @@ def write_material_scene(directory: str) -> str:
 
 
 SCENES = {"features": write_feature_scene, "materials": write_material_scene, "textures": write_texture_scene, "bumps": write_bump_scene,
+          "normalmaps": write_normal_scene,
+          "normalmaps-twosided": lambda d: write_normal_scene(d, twosided_panel=True),
           "masks": write_mask_scene, "delta-lights": write_delta_scene, "thinlens": write_thinlens_scene,
           # the delta lights alone: points and spots (no other light), and the sun
           "delta-only": lambda d: write_delta_scene(d, ("point", "spot")),

@@ -30,6 +30,7 @@ REFERENCES = {
     "features": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: envmap, texture, plastic, ...
     "textures": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: checkerboard, filter / wrap modes, to_uv
     "bumps": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: bumpmap around six BSDFs, scale, to_uv, switches
+    "normalmaps": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: normalmap around five BSDFs, switches, mirrored uvs
     "masks": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: mask by texture (luminance) and constant, around bumpmap, conductors
     "delta-lights": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: point, spot, directional, area light, constant env
     "thinlens": (48, 36, 5, 4096, 16),  # tests/data/feature_scene.py: the same room through a thin lens

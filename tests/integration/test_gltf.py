@@ -158,6 +158,67 @@ def test_textures_alpha_mask_and_transform(tmp_path):
     assert b[8, 11, 0] > 10 * b[8, 11, 2] > 0 and b[8, 5].max() == 0.0  # shifted by half
 
 
+def _png(rgb) -> bytes:
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.fromarray(np.array([[rgb]], np.uint8)).save(out, format="PNG")
+    return out.getvalue()
+
+
+def test_a_normal_map_tilts_toward_the_images_top_on_mirrored_uvs_too(tmp_path):
+    """A one-texel normal map tilting 30 degrees toward the image's top (green, glTF's +Y), on a
+    plane whose image top is +Y in the world, mapped as it stands and mirrored (u reversed): in
+    both the normal tilts toward +Y (MikkTSpace's bitangent sign), so under a sun from the +Y side
+    both are brighter than the flat plane and equal. With the sign ignored (Mitsuba's frame), the
+    mirrored one tilts away and is darker."""
+    a = math.radians(30)
+    png = _png(np.round((np.array([0.0, math.sin(a), math.cos(a)]) + 1) * 127.5))
+    v, f = plane(1.0)
+    straight = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], float)  # glTF: v = 0 at the image's top
+    mirrored = np.array([[1, 1], [0, 1], [0, 0], [1, 0]], float)
+    b = math.radians(50)  # the sun travels along (0, -sin b, -cos b): it shines from the +Y side
+    sun = np.eye(4)
+    sun[:3, :3] = [[1, 0, 0], [0, math.cos(b), math.sin(b)], [0, -math.sin(b), math.cos(b)]]  # -Z to the sun's path
+    light = ({"type": "directional", "color": [1, 1, 1], "intensity": 2.0}, sun)
+
+    def centre(uvs, normal_texture=None, flip=False):
+        mat = mr([0.8, 0.8, 0.8])
+        if normal_texture is not None:
+            mat["normalTexture"] = normal_texture
+        path = write_gltf(tmp_path / f"n{len(list(tmp_path.iterdir()))}.glb", [(v, f, 0, {"uvs": uvs})], [mat],
+                          camera=(top_down_camera(2.0), math.radians(30), 1.0, "c"), lights=[light],
+                          images=[png] if normal_texture else [])
+        scene = restir.load_scene(path)
+        if normal_texture is not None:
+            (m,) = scene.materials
+            assert m.bump.kind == "normal" and m.bump.uv_handed and m.bump.scale == normal_texture.get("scale", 1.0)
+            m.bump.uv_handed = not flip
+        return restir.render(scene, method="pt", spp=1, width=8, height=8, seed=1).image[4, 4].mean()
+
+    flat = centre(straight)
+    tilted, tilted_mirrored = centre(straight, {"index": 0}), centre(mirrored, {"index": 0})
+    assert tilted > 1.1 * flat
+    assert tilted_mirrored == pytest.approx(tilted, rel=1e-4)
+    assert centre(mirrored, {"index": 0}, flip=True) < 0.9 * flat
+    # scale 0 on x and y: the normal (0, 0, cos a) is the plane's own
+    assert centre(straight, {"index": 0, "scale": 0.0}) == pytest.approx(flat, rel=1e-4)
+
+
+def test_a_double_sided_emissive_material_lights_both_sides(tmp_path):
+    v, f = plane(1.0)
+    below = np.diag([1.0, -1.0, -1.0, 1.0])  # a camera under the plane, looking up +Z
+    below[2, 3] = -2.0
+    for double, expect in ((True, 0.5), (False, 0.0)):
+        path = write_gltf(tmp_path / f"e{double}.gltf", [(v, f, 0, {})],
+                          [mr([0, 0, 0], emissiveFactor=[0.5, 0.5, 0.5], doubleSided=double)],
+                          camera=(below, math.radians(40), 1.0, "c"))
+        scene = restir.load_scene(path)
+        assert (scene.tri_emit_twosided is not None) == double
+        img = restir.render(scene, method="pt", spp=1, width=8, height=8, seed=1).image
+        np.testing.assert_allclose(img[4, 4], expect, atol=1e-6)
+
+
 def test_transmission_mixes_a_dielectric_in(tmp_path):
     v, f = plane(1.0)
     mats = [mr([0.9, 0.9, 0.9], 0.0, 0.0, extensions={"KHR_materials_transmission": {"transmissionFactor": 0.25},

@@ -3,7 +3,8 @@ Mitsuba 0.5 as distributed, upgraded on load), and of
 the generated scenes of tests/data/feature_scene.py (features: envmap, bitmap texture, plastic,
 rough dielectric, GGX, disk light; textures: checkerboard, filter and wrap modes, to_uv, textures
 on every texturable parameter; bumps: bump maps around five BSDFs, a mesh without uvs, and
-Bitterli's unreferenced wrapper, which neither renderer applies; masks: opacity masks by texture
+Bitterli's unreferenced wrapper, which neither renderer applies; normalmaps: normal maps around
+five BSDFs, with the switches, on a mesh whose uvs are mirrored on half its faces; masks: opacity masks by texture
 and constant, around a bump map and two conductors, seen through by the camera; delta-lights:
 Mitsuba 3's point, spot and directional emitters mixed with an area light and a constant
 environment; thinlens: a thin-lens sensor).
@@ -31,9 +32,9 @@ from tests.shared_scenes import scene_path
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data" / "mitsuba"
 FRAMES = 32
-SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256, "bumps": 256, "masks": 256,
+SPP = {"cornell-box": 256, "veach-mis": 2048, "veach-bidir": 512, "features": 256, "textures": 256, "bumps": 256, "normalmaps": 256, "masks": 256,
        "delta-lights": 256, "thinlens": 256, "veach-ajar": 256, "staircase2": 256}
-MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01, "bumps": 0.01, "masks": 0.01,
+MDB_BOUND = {"cornell-box": 0.01, "veach-mis": 0.02, "veach-bidir": 0.02, "features": 0.01, "textures": 0.01, "bumps": 0.01, "normalmaps": 0.01, "masks": 0.01,
              "delta-lights": 0.01, "thinlens": 0.01, "veach-ajar": 0.02, "staircase2": 0.02}
 # Tungsten's render of the same scene (as distributed with it): a cross-renderer check of the mean
 # only (its pixels are not resolved well enough, and the two renderers' colour handling differs a
@@ -42,8 +43,8 @@ TUNGSTEN_TOL = 0.02
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures", "bumps", "masks",
-                                  "delta-lights", "thinlens", "veach-ajar", "staircase2"])
+@pytest.mark.parametrize("name", ["cornell-box", "veach-mis", "veach-bidir", "features", "textures", "bumps", "normalmaps",
+                                  "masks", "delta-lights", "thinlens", "veach-ajar", "staircase2"])
 def test_path_tracer_matches_mitsuba(device, name, tmp_path):
     meta_path = DATA / f"{name}.json"
     if not meta_path.exists():

@@ -279,3 +279,74 @@ def test_a_referenced_wrapper_is_applied_without_a_warning(tmp_path, recwarn):
     sc = restir.load_scene(path)
     assert sc.materials[0].bump is not None and sc.materials[0].twosided
     assert not [w for w in recwarn if issubclass(w.category, SceneWarning)]
+
+
+# ----------------------------------------------------------------------------- normal maps
+def normal_xml(extra="", inner='<bsdf type="diffuse"/>', tex_extra='<boolean name="raw" value="true"/>'):
+    return (f'<bsdf type="normalmap"><texture name="normalmap" type="bitmap"><string name="filename" value="h.png"/>'
+            f'{tex_extra}</texture>{extra}{inner}</bsdf>')
+
+
+# one texel: the normal 2c - 1 = (0.6, -0.3, 0.7) (unnormalized) in the frame (s, t, ns)
+NORMAL_TEXEL = np.array([[[204, 89, 217]]], np.uint8)
+NORMAL = 2 * NORMAL_TEXEL[0, 0].astype(float) / 255 - 1
+
+
+def test_a_normal_map_tilts_the_normal_by_hand(tmp_path):
+    """On the rectangle dp/du = (2, 0, 0) and ns = (0, 0, 1): s = (1, 0, 0), t = ns x s =
+    (0, 1, 0), so the texel's normal is n = normalize(2c - 1) in world space as it stands;
+    `strength` scales its first two components; `uv_handed` turns t against dp/dv = (0, 2, 0)."""
+    for extra, expect in (("", NORMAL),
+                          ('<float name="strength" value="0.5"/>', NORMAL * (0.5, 0.5, 1.0)),
+                          ('<boolean name="uv_handed" value="true"/>', NORMAL * (1.0, -1.0, 1.0))):
+        sub = tmp_path / str(len(extra))
+        sub.mkdir()
+        n, n0, alpha2, _, _ = shade(device_scene(write_scene(sub, normal_xml(extra), NORMAL_TEXEL)), (0.0, 0.0, 1.0))
+        np.testing.assert_allclose(n, expect / np.linalg.norm(expect), atol=2e-5)
+        # the bump map's terms apply as they stand: ns in the tilted frame, Estevez's alpha^2
+        assert n0[2] == pytest.approx(n[2], abs=2e-6)
+        assert alpha2 == pytest.approx(min((1 - n[2] ** 2) / n[2] ** 2 / 8, 1.0), rel=1e-4)
+
+
+def test_an_invalid_map_normal_is_mirrored_about_ns(tmp_path):
+    """wi above ns but below the map's normal: mirrored about ns, (x, y, z) -> (-x, -y, z), as
+    Mitsuba 3's normalmap flips it; with flip_invalid_normals off it stays."""
+    n_map = NORMAL / np.linalg.norm(NORMAL)
+    wi = (-1.0, 0.0, 0.2)
+    assert np.dot(wi, n_map) < 0 < wi[2]
+    for flip, expect in (("", n_map * (-1, -1, 1)), ('<boolean name="flip_invalid_normals" value="false"/>', n_map)):
+        sub = tmp_path / str(len(flip))
+        sub.mkdir()
+        n, *_ = shade(device_scene(write_scene(sub, normal_xml(flip), NORMAL_TEXEL)), wi)
+        np.testing.assert_allclose(n, expect, atol=2e-5)
+
+
+def test_a_flat_normal_map_changes_nothing(tmp_path):
+    """(0.5, 0.5, 1): the normal ns itself, and a diffuse's eval equal to the plain diffuse's."""
+    flat = np.array([[[128, 128, 255]]], np.uint8)  # 128/255 is not exactly 1/2: 2c - 1 = 1/255
+    wos = [(0.3, 0.2, 1.0), (-0.5, 0.1, 0.4)]
+    n, _, _, f, pdf = shade(device_scene(write_scene(tmp_path, normal_xml(), flat)), (0.0, 0.3, 1.0), wos)
+    np.testing.assert_allclose(n, (0, 0, 1), atol=6e-3)
+    for i, wo in enumerate(wos):
+        wo = np.array(wo) / np.linalg.norm(wo)
+        np.testing.assert_allclose(f[i], 0.5 / math.pi * np.dot(wo, n), rtol=1e-3)
+
+
+@pytest.mark.parametrize("bsdf,message", [
+    ('<bsdf type="twosided">{}</bsdf>'.format(normal_xml()), "normalmap inside a twosided"),
+    (normal_xml(inner=bump_xml()), "nested bumpmap and normalmap"),
+    ('<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>', "exactly one nested BSDF and one texture"),
+    ('<bsdf type="normalmap"><texture name="normalmap" type="checkerboard"/><bsdf type="diffuse"/></bsdf>',
+     "not a normal map"),
+])
+def test_bad_normal_maps_are_refused(tmp_path, bsdf, message):
+    with pytest.raises(SceneError, match=message):
+        restir.load_scene(write_scene(tmp_path, bsdf, NORMAL_TEXEL))
+
+
+def test_an_srgb_normal_map_is_said(tmp_path):
+    """Without raw=true Mitsuba 3 decodes the 8-bit file as sRGB, and so does restir; said."""
+    with pytest.warns(SceneWarning, match="read as sRGB-encoded"):
+        sc = restir.load_scene(write_scene(tmp_path, normal_xml(tex_extra=""), NORMAL_TEXEL))
+    (m,) = sc.materials
+    assert m.bump.kind == "normal" and m.bump.scale == 1.0 and not m.bump.uv_handed

@@ -119,6 +119,47 @@ def test_an_area_light_emits_to_the_side_its_normals_face(tmp_path):
                      'Material "diffuse" "rgb reflectance" [ 0 0 0 ]\n' + quad(-3, 3, -3, 3, 5, n), name)
         imgs.append(render(path, spp=1))
     assert np.allclose(imgs[0][16, 16], 1.0) and np.allclose(imgs[1], 0.0)
+    # "bool twosided": both sides
+    path = write(tmp_path, CAMERA + FILM + "WorldBegin\n" + 'AreaLightSource "diffuse" "rgb L" [ 1 1 1 ] '
+                 '"bool twosided" true\nMaterial "diffuse" "rgb reflectance" [ 0 0 0 ]\n' + quad(-3, 3, -3, 3, 5, away),
+                 "twosided.pbrt")
+    assert np.allclose(render(path, spp=1)[16, 16], 1.0)
+
+
+def test_a_two_sided_area_lights_power_is_spread_over_both_sides(tmp_path):
+    """pbrt-v4: L = power / (2 pi A) for a two-sided emitter, power / (pi A) for a one-sided one."""
+    for twosided, sides in (("true", 2), ("false", 1)):
+        path = write(tmp_path, CAMERA + "WorldBegin\n" + f'AreaLightSource "diffuse" "float power" 10 '
+                     f'"bool twosided" {twosided}\n' + quad(-1, 1, -2, 2, 5), f"{twosided}.pbrt")
+        scene = restir.load_scene(path)
+        assert np.allclose(scene.tri_emission, 10 / (sides * math.pi * 8.0), rtol=1e-5)
+        assert (scene.tri_emit_twosided is not None) == (sides == 2)
+        assert scene.light_power().sum() == pytest.approx(10 / math.pi, rel=1e-5)  # power / pi either way
+
+
+def test_a_normal_map_is_read_linear_and_wins_over_displacement(tmp_path):
+    """"string normalmap": the image read linear, repeated and bilinear (pbrt-v4's Image::Read
+    with a linear encoding), as restir's normalmap; with a displacement as well, pbrt-v4 applies
+    only the normal map, and restir says so."""
+    from PIL import Image
+
+    Image.fromarray(np.array([[[200, 100, 230]]], np.uint8)).save(tmp_path / "n.png")
+    Image.fromarray(np.full((2, 2), 90, np.uint8)).save(tmp_path / "h.png")
+    material = 'Material "diffuse" "string normalmap" "n.png"'
+    disp = ' "texture displacement" "h"'
+    for extra, warned in (("", []), (disp, ["'displacement' is not applied"])):
+        path = write(tmp_path, CAMERA + "WorldBegin\n" + 'Texture "h" "float" "imagemap" "string filename" "h.png"\n'
+                     + material + extra + "\n" + quad(-1, 1, -1, 1, 5), f"n{len(extra)}.pbrt")
+        with pytest.warns(SceneWarning) as rec:
+            scene = restir.load_scene(path)
+        said = " ".join(str(w.message) for w in rec)
+        assert "rendered as Mitsuba 3's normalmap and bumpmap" in said
+        assert all(w in said for w in warned)
+        (m,) = scene.materials
+        assert m.bump.kind == "normal" and m.twosided and m.bump.scale == 1.0 and not m.bump.uv_handed
+        tex = scene.textures[m.bump.texture]
+        assert (tex.wrap, tex.filter) == ("repeat", "bilinear")
+        np.testing.assert_allclose(tex.image[0, 0], np.array([200, 100, 230]) / 255, rtol=1e-6)
 
 
 def test_an_image_texture_is_upright_where_uv_v_grows_upward(tmp_path):
@@ -206,7 +247,6 @@ def test_materials_map_onto_restirs(tmp_path):
     ('NamedMaterial "nope"\n', "unknown named material 'nope'"),
     ('LightSource "goniometric"\n', "LightSource 'goniometric' is not supported"),
     ('LightSource "infinite" "string filename" "sky.exr"\n', "infinite: environment map 'sky.exr' not found"),
-    ('AreaLightSource "diffuse" "bool twosided" true\n', "'twosided' emitters are not supported yet"),
     ('ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n', "an animated transform"),
     ('Attribute "camera" "float fov" 30\n', "Attribute: unknown target 'camera'"),
 ])

@@ -1,5 +1,5 @@
 """glTF 2.0 materials as restir's: the metallic-roughness model (device/bsdfs/metallic_roughness.py)
-with its textures, `doubleSided`, `alphaMode`, KHR_materials_emissive_strength,
+with its textures, its normal map, `doubleSided`, `alphaMode`, KHR_materials_emissive_strength,
 KHR_texture_transform, and KHR_materials_transmission with KHR_materials_ior as a dielectric
 mixed in by the transmission factor (docs/guide/gltf.md).
 
@@ -72,7 +72,31 @@ class Materials:
     def bitmap(data: np.ndarray, sampling: dict) -> dict:
         return {"type": "bitmap", "data": np.ascontiguousarray(data, np.float32), **sampling}
 
+    def _normal_mapped(self, b: dict, info, what: str) -> dict:
+        """`b` under glTF's tangent-space normal map (linear RGB, its `scale` on x and y), with the
+        bitangent's sign taken from each triangle's uv mapping as MikkTSpace takes it (restir's
+        `uv_handed`); a mixture's two BSDFs each under it (a normalmap wraps one BSDF)."""
+        if b["type"] == "mixture":
+            return {**b, "bsdf_a": self._normal_mapped(b["bsdf_a"], info, what),
+                    "bsdf_b": self._normal_mapped(b["bsdf_b"], info, what)}
+        img, smp = self.texels(info, f"{what}: normalTexture")
+        scale = float(info.scale if info.scale is not None else 1.0)
+        return {"type": "normalmap", "normalmap": self.bitmap(img[..., :3], smp), "strength": scale,
+                "uv_handed": True, "bsdf": b}
+
     # ------------------------------------------------------------------ materials
+    def _of(self, index: int | None):
+        mats = self.gltf.materials or []
+        return mats[index] if index is not None and 0 <= index < len(mats) else None
+
+    def double_sided(self, index: int | None) -> bool:
+        m = self._of(index)
+        return bool(m is not None and m.doubleSided)
+
+    def normal_mapped(self, index: int | None) -> bool:
+        m = self._of(index)
+        return m is not None and m.normalTexture is not None
+
     def material(self, index: int | None) -> tuple[dict, np.ndarray, dict | None]:
         """(BSDF object, emitted radiance RGB, emissive bitmap or None) of material `index`
         (None: the specification's default material)."""
@@ -106,9 +130,6 @@ class Materials:
             img, smp = self.texels(pbr.metallicRoughnessTexture, f"{what}: metallicRoughnessTexture")
             b["metallic"] = self.bitmap(np.repeat(img[..., 2:3] * metallic, 3, axis=2), smp)
             b["roughness"] = self.bitmap(np.repeat(img[..., 1:2] * roughness, 3, axis=2), smp)
-        if m.normalTexture is not None:
-            self.warn_once(("normal", i), f"{what}: normalTexture is not applied (restir has no normal maps): the "
-                           "shading normals are the mesh's")
         if m.occlusionTexture is not None:
             self.warn_once(("occlusion", i), f"{what}: occlusionTexture is not used (a path tracer computes the "
                            "occlusion itself)")
@@ -135,6 +156,8 @@ class Materials:
             b = glass if t >= 1.0 else {"type": "mixture", "bsdf_a": b, "bsdf_b": glass, "amount": np.full(3, t)}
         elif m.doubleSided:
             b = {"type": "twosided", "bsdf": b}
+        if m.normalTexture is not None:
+            b = self._normal_mapped(b, m.normalTexture, what)
         mode = m.alphaMode or "OPAQUE"
         if mode != "OPAQUE":
             opacity = float(base[3])

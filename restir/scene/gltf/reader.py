@@ -142,6 +142,10 @@ class _Reader:
             attrs = prim.attributes
             if attrs.POSITION is None:
                 raise SceneError(f"{what} has no POSITION", self.path)
+            if attrs.TANGENT is not None and self.materials.normal_mapped(prim.material):
+                self.materials.warn_once("tangent", "TANGENT attributes are not read: a normal map's tangent frame "
+                                         "is derived from each triangle's uv mapping (MikkTSpace's, without its "
+                                         "smoothing across triangles)")
             if attrs.COLOR_0 is not None:
                 warn(f"{what}: its vertex colours (COLOR_0) are not applied to the base colour", self.path)
             bsdf, emission, emission_tex = self.materials.material(prim.material)
@@ -149,7 +153,9 @@ class _Reader:
             shape = {"type": "triangles", "load": self._loader(what, prim, mode, m, emission_tex, emission),
                      "bsdf": bsdf, "_loc": self.path}
             if np.any(emission > 0):
-                shape["emitter"] = {"type": "area", "radiance": emission, "_loc": self.path}
+                # a double-sided material lights its back face too (its normals reversed there)
+                shape["emitter"] = {"type": "area", "radiance": emission, "_loc": self.path,
+                                    "twosided": self.materials.double_sided(prim.material)}
             self.shapes.append(shape)
 
     def _loader(self, what, prim, mode, m, emission_tex, emission):

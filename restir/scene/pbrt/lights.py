@@ -161,8 +161,7 @@ class AreaLight:
     def __init__(self, kind: str, ps: ParamSet, ratio: float):
         if kind != "diffuse":
             raise SceneError(f"AreaLightSource '{kind}' is not supported (diffuse only)", ps.loc)
-        if ps.bool("twosided", False):
-            raise SceneError("AreaLightSource: 'twosided' emitters are not supported yet", ps.loc_of("twosided"))
+        self.twosided = ps.bool("twosided", False)
         for p in ("filename", "alpha"):
             if ps.has(p):
                 raise SceneError(f"AreaLightSource: '{p}' is not supported", ps.loc_of(p))
@@ -176,5 +175,6 @@ class AreaLight:
         if self.phi:
             if not area:
                 raise SceneError("AreaLightSource: 'power' on a shape whose area is zero", self.loc)
-            radiance = radiance * self.phi / (math.pi * area)
-        return {"type": "area", "radiance": radiance, "_loc": self.loc}
+            # pbrt-v4 spreads the power over both sides of a two-sided emitter
+            radiance = radiance * self.phi / (math.pi * area * (2 if self.twosided else 1))
+        return {"type": "area", "radiance": radiance, "twosided": self.twosided, "_loc": self.loc}

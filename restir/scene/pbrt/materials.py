@@ -176,11 +176,19 @@ class Materials:
             raise SceneError(f"material '{kind}' is not supported yet (supported: {', '.join(MATERIALS)})", loc)
         if kind not in MATERIALS:
             raise SceneError(f"unknown material '{kind}' (supported: {', '.join(MATERIALS)})", loc)
-        if ps.has("normalmap"):
-            raise SceneError("a material's 'normalmap' is not supported", ps.loc_of("normalmap"))
+        normal_map = ps.string("normalmap", None)
         bump = ps.texture("displacement")
         if bump is None and ps.has("displacement"):
             ps.float("displacement")  # a constant displacement moves nothing
+        if normal_map is not None and bump is not None:
+            warn("the material's 'displacement' is not applied: pbrt-v4 applies only the normal map when a "
+                 "material has both", ps.loc_of("displacement"))
+            bump = None
+        if (normal_map is not None or bump is not None) and "perturbed" not in self.warned:
+            self.warned.add("perturbed")
+            warn("normal and bump maps are rendered as Mitsuba 3's normalmap and bumpmap, which keep the tilted "
+                 "normal on the incoming direction's side and shade the terminator (Estevez et al.); pbrt-v4 does "
+                 "neither, so strongly tilted normals shade differently", ps.loc)
         if kind == "interface":
             ps.warn_unused()
             return None
@@ -212,7 +220,11 @@ class Materials:
                  "transmittance": _scaled(self.value(ps, "transmittance", [0.25] * 3, "spectrum"), scale, ps)}
         else:  # coateddiffuse
             b = self._coateddiffuse(ps)
-        if bump is not None:
+        if normal_map is not None:  # pbrt-v4 reads it linear, repeated, bilinear, at (u, 1 - v) as its images
+            b = {"type": "normalmap", "normalmap": {"type": "bitmap", "filename": normal_map, "raw": True,
+                                                    "wrap_mode": "repeat", "filter_type": "bilinear",
+                                                    "_loc": ps.loc_of("normalmap")}, "bsdf": b}
+        elif bump is not None:
             b = {"type": "bumpmap", "texture": self.texture(bump, "float", ps.loc_of("displacement")), "bsdf": b}
         for d in _walk(b):
             d.setdefault("_loc", loc)
