@@ -27,6 +27,9 @@ What it measures, each with the command line that reproduces it (in the JSON):
   Cornell box) where the `mitsuba` package is installed; "not installed" otherwise.
 - loads: restir.load_scene and the upload to the device (the BVH and Embree builds) for every
   shared scene and every builtin.
+- view: `restir view`'s render loop without a browser (benchmarks/bench_view.py): ReSTIR PT on
+  builtin:cornell-box at 256x256 with the camera still, and at the moving size with it turning,
+  in frames per second with the tonemapping and the JPEG the page receives.
 - verdicts: the slow tier's matrix verdicts as recorded by a run with
   RESTIR_RECORD_VERDICTS=benchmarks/results/verdicts.json (tests/helpers.py); "not recorded"
   when that file is missing. Nothing here runs the slow tier.
@@ -59,7 +62,7 @@ sys.path.insert(0, ROOT)
 RESULTS = os.path.join("benchmarks", "results", "results.json")
 VERDICTS = os.path.join("benchmarks", "results", "verdicts.json")
 LOGS = os.path.join("out", "results_suite")
-PARTS = ("cost", "equal-time", "many-lights", "many-delta-lights", "mitsuba", "loads", "verdicts")
+PARTS = ("cost", "equal-time", "many-lights", "many-delta-lights", "mitsuba", "loads", "view", "verdicts")
 PYTHON = ".venv/bin/python"
 RESTIR = ".venv/bin/restir"
 
@@ -67,11 +70,11 @@ SIZES = {
     "default": {"cost_size": 512, "cost_timed_frames": 4, "cost_rounds": 2, "cost_max_depth": 8,
                 "lines": 128, "seconds": 3.0, "reference_spp": 1024, "warmup": 4,
                 "many_lights_size": 128, "mitsuba_size": 256, "mitsuba_spp": 4, "mitsuba_rounds": 2,
-                "load_repeats": 3},
+                "load_repeats": 3, "view_size": 256, "view_seconds": 10.0},
     "quick": {"cost_size": 256, "cost_timed_frames": 2, "cost_rounds": 2, "cost_max_depth": 8,
               "lines": 64, "seconds": 1.0, "reference_spp": 256, "warmup": 4,
               "many_lights_size": 64, "mitsuba_size": 128, "mitsuba_spp": 1, "mitsuba_rounds": 1,
-              "load_repeats": 1},
+              "load_repeats": 1, "view_size": 128, "view_seconds": 3.0},
 }
 COST_SCENE = "builtin:cornell-box"
 # (method, max_depth): the path tracer at each depth first; every other method's ratio is to the
@@ -438,7 +441,19 @@ def part_loads(args, size) -> dict:
             "shared_scenes": "found" if root else "not found (RESTIR_SCENES or ../shared/scenes)", "scenes": rows}
 
 
-# ------------------------------------------------------------------ (f) the matrix verdicts
+# ------------------------------------------------------------------ (f) the viewer's frame rate
+def part_view(args, size) -> dict:
+    spec = importlib.util.spec_from_file_location("bench_view", os.path.join(ROOT, "benchmarks", "bench_view.py"))
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out = bench.measure("builtin:cornell-box", "restir-pt", size["view_size"], size["view_seconds"])
+    log(f"view: still {out['still']['fps']:.1f} frames/s at {out['still']['width']}, moving "
+        f"{out['moving']['fps']:.1f} at {out['moving']['width']}")
+    return {**out, "command": f"{PYTHON} benchmarks/bench_view.py --size {size['view_size']} "
+                              f"--seconds {size['view_seconds']:g}"}
+
+
+# ------------------------------------------------------------------ (g) the matrix verdicts
 def matrix_size(path: str) -> int | None:
     """How many cells the slow tier's matrix file has (pytest's collection), so that the page can
     say how many of them a recording covers."""
@@ -478,7 +493,7 @@ def part_verdicts(args, size) -> dict:
 # ------------------------------------------------------------------ the run
 RUNNERS = {"cost": part_cost, "equal-time": part_equal_time, "many-lights": part_many_lights,
            "many-delta-lights": part_many_delta_lights,
-           "mitsuba": part_mitsuba, "loads": part_loads, "verdicts": part_verdicts}
+           "mitsuba": part_mitsuba, "loads": part_loads, "view": part_view, "verdicts": part_verdicts}
 
 
 def main() -> int:

@@ -329,6 +329,20 @@ def _loads(results: dict) -> list:
         ["", *_command(ld["command"])]
 
 
+def _view(results: dict) -> list:
+    v = results.get("view")
+    if not v:
+        return ["Not measured in this run."]
+    rows = [[mode, f"{v[mode]['width']}x{v[mode]['height']}", f"{v[mode]['fps']:.1f}",
+             _ms(v[mode]["render_ms_median"]), _ms(v[mode]["encode_ms_median"])] for mode in ("still", "moving")]
+    lines = [f"`restir view`'s render loop without the browser: {v['method']} on `{v['scene']}` ({v['device']}), "
+             "each frame rendered from the camera, tonemapped and encoded as the JPEG the page receives; the camera "
+             "standing (the film's full size), and turning half a degree a frame at the reduced size the viewer "
+             f"uses while it moves; {v['seconds']:g} s each after a warm-up.", ""]
+    return lines + _table(["camera", "film", "frames/s", "render (ms)", "encode (ms)"], rows) + \
+        ["", *_command(v["command"])]
+
+
 def _verdicts(results: dict) -> list:
     v = results.get("verdicts")
     if not v:
@@ -411,6 +425,7 @@ def render_results_page(results: dict) -> str:
               "## Many delta lights: ReSTIR DI", "", *_many_lights(results, "many_delta_lights"), "",
               "## The path tracer against Mitsuba 3", "", *_mitsuba(results), "",
               "## Scene loads", "", *_loads(results), "",
+              "## The interactive viewer", "", *_view(results), "",
               "## The validation matrix", "", *_verdicts(results), ""]
     return "\n".join(lines)
 

@@ -249,7 +249,9 @@ def _stderr_without(marker: str):
                 os.write(2, b"".join(kept))
 
 
-def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
+def method_settings(scene: Scene, config: RenderConfig):
+    """(the method's class, its checked settings, notes) for `config` on `scene`: every refusal of
+    a setting (a ConfigError) before anything is built."""
     from .integrators import METHODS
 
     if config.method not in METHODS:
@@ -269,10 +271,18 @@ def make_integrator(scene: Scene, config: RenderConfig, on_compile=None):
                                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     settings.check_common()
     cls.check_settings(settings)
-    try:
-        dscene = DeviceScene(scene, config.device, config.tracer, config.jitter)
-    except RuntimeError as e:
-        raise ConfigError(str(e)) from None
+    return cls, settings, notes
+
+
+def make_integrator(scene: Scene, config: RenderConfig, on_compile=None, dscene=None):
+    """The method's integrator for `scene` (uploaded here, or `dscene`: the scene already on the
+    device, as the viewer keeps it across integrators)."""
+    cls, settings, notes = method_settings(scene, config)
+    if dscene is None:
+        try:
+            dscene = DeviceScene(scene, config.device, config.tracer, config.jitter)
+        except RuntimeError as e:
+            raise ConfigError(str(e)) from None
     try:
         integ = cls(dscene, settings, config.device, config.slices, on_compile=on_compile)
     except (MemoryError, RuntimeError) as e:
@@ -394,3 +404,4 @@ def write_image(path: str, image, exposure: float = 0.0) -> None:
     from .image_io import write_image as _write
 
     _write(os.fspath(path), np.asarray(getattr(image, "image", image), dtype=np.float32), exposure)
+

@@ -196,13 +196,18 @@ def _read_any(path: str, linearize_srgb: bool) -> np.ndarray:
     return (srgb_to_linear(table) if linearize_srgb else table)[img]
 
 
+def tonemap(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+    """Linear RGB as 8-bit sRGB with exposure (stops); non-finite pixels become black."""
+    x = np.nan_to_num(np.asarray(rgb, np.float64) * (2.0 ** exposure), nan=0.0, posinf=0.0, neginf=0.0)
+    return (linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)
+
+
 def write_png(path: str, rgb: np.ndarray, exposure: float = 0.0) -> None:
     """Tonemap linear RGB with exposure (stops) and the sRGB curve; non-finite pixels become black."""
     from PIL import Image
 
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    x = np.nan_to_num(np.asarray(rgb, np.float64) * (2.0 ** exposure), nan=0.0, posinf=0.0, neginf=0.0)
-    Image.fromarray((linear_to_srgb(x) * 255.0 + 0.5).astype(np.uint8)).save(path)
+    Image.fromarray(tonemap(rgb, exposure)).save(path)
 
 
 # Extension -> what write_image writes there.

@@ -1,5 +1,5 @@
 """Command line: `restir COMMAND ...` (the contract in docs/reference/cli.md), one module per
-command (render, validate, compare, sweep, info: each `add_parser(sub)` and `run(args)`) and
+command (render, validate, compare, sweep, info, view: each `add_parser(sub)` and `run(args)`) and
 common.py for what they share.
 
 Arguments are parsed into the API's configs; user errors print one line (`file:line: error:
@@ -11,10 +11,10 @@ import warnings
 
 from ..config import ConfigError
 from ..scene.errors import SceneError
-from . import compare, info, render, sweep, validate
+from . import compare, info, render, sweep, validate, view
 from .common import DEFAULT_MAX_MDB, Parser, fraction
 
-COMMANDS = {"render": render, "info": info, "validate": validate, "compare": compare, "sweep": sweep}
+COMMANDS = {"render": render, "info": info, "validate": validate, "compare": compare, "sweep": sweep, "view": view}
 __all__ = ["main", "build_parser", "COMMANDS", "DEFAULT_MAX_MDB", "fraction"]
 
 

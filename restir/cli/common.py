@@ -276,7 +276,7 @@ def open_tev(address):
     said now), or None without --tev."""
     if not address:
         return None
-    from ..viewer import connect_tev
+    from ..tev import connect_tev
 
     return connect_tev(address)
 

@@ -120,7 +120,7 @@ def run(args) -> int:
     for line in result.headline:
         say(out, line["text"])
     if tev is not None:
-        from ..viewer import send_to_tev
+        from ..tev import send_to_tev
 
         send_to_tev(tev, "reference", result.reference.image.astype("float32"))
         for m in result.methods:

@@ -107,7 +107,7 @@ def run(args) -> int:
         write(output, write_image, result.image, args.exposure)
     written = [output]
     if tev is not None:
-        from ..viewer import send_to_tev
+        from ..tev import send_to_tev
 
         send_to_tev(tev, f"{result.stats['method']} {result.stats['scene']}", result.image, result.aovs)
         close_tev(tev)

@@ -78,6 +78,7 @@ class Integrator:
         self.notes: list[str] = []          # what the method changed of the request (shown and kept in stats)
         self.on_samples = None  # progress hook within a frame: on_samples(samples_done, spp), if set
         self.stop_requested = None  # if set, a callable: True drops the frame in flight (FrameInterrupted)
+        self.view_pose = None  # a camera-to-world set from outside (the interactive viewer): wins over the motion
         self.events = self.buffer("events", EventCounts)  # per-stage scratch, summed into the tally
         self.tally = EventTally(self.device)  # the events' sums on the device, read once per frame
         self._film = None
@@ -98,9 +99,12 @@ class Integrator:
         return self.KERNELS
 
     def camera(self, frame: int):
-        """The device camera of `frame` (scripted motion from the settings, if any)."""
+        """The device camera of `frame`: the viewer's pose when one is set, else the scripted
+        motion of the settings, if any."""
         from ..camera_motion import camera_pose
 
+        if self.view_pose is not None:
+            return self.dscene.camera_at(self.view_pose)
         motion = self.settings.camera_motion
         if motion == "none":
             return self.dscene.camera

@@ -1,4 +1,6 @@
 """Host Scene -> device structs (SceneDevice, Camera). Keeps the Warp arrays alive."""
+import copy
+
 import numpy as np
 import warp as wp
 
@@ -235,6 +237,16 @@ class DeviceScene:
         c.aperture_radius = float(cd.aperture_radius)
         c.focus_distance = float(cd.focus_distance)
         return c
+
+    def with_camera(self, cd) -> "DeviceScene":
+        """This scene's device arrays under another camera (scene.CameraDesc: the viewer's film
+        size and field of view), shared rather than uploaded again."""
+        out = copy.copy(self)
+        out.host = copy.copy(self.host)
+        out.host.camera = cd
+        out._arrays = list(self._arrays)
+        out.camera = out.camera_struct(cd)
+        return out
 
     def camera_at(self, to_world: np.ndarray) -> Camera:
         """The camera with another pose (scripted motion); filter tables are shared."""
