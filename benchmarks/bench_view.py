@@ -8,7 +8,7 @@ reduced size (MOVING_SCALE of each side), as while the user drags. Each mode ren
 frames to warm up (the kernels load, the history fills), then as many as fit in `seconds`.
 
     .venv/bin/python benchmarks/bench_view.py [--scene builtin:cornell-box] [--method restir-pt]
-        [--size 256] [--seconds 10] [--device cpu] [--memory SECONDS]
+        [--size 256] [--width W] [--seconds 10] [--device cpu] [--memory SECONDS]
 
 --memory SECONDS instead renders moving and still spans of 5 s in turn for that long (the
 viewer's two film sizes, each with its integrator) and reports the process's resident memory
@@ -29,7 +29,9 @@ WARMUP = 4
 
 
 def measure(scene: str = "builtin:cornell-box", method: str = "restir-pt", size: int = 256, seconds: float = 10.0,
-            device: str = "cpu") -> dict:
+            device: str = "cpu", width: int | None = None) -> dict:
+    """Frames per second still (size x size, or width x size) and moving (each side scaled by
+    MOVING_SCALE)."""
     from PIL import Image
 
     import restir
@@ -42,7 +44,8 @@ def measure(scene: str = "builtin:cornell-box", method: str = "restir-pt", size:
     live = LiveRender(sc, method, device=device)
     out = {"scene": scene, "method": method, "device": device, "seconds": seconds}
     for mode in ("still", "moving"):
-        side = size if mode == "still" else max(8, round(size * MOVING_SCALE))
+        scale = 1.0 if mode == "still" else MOVING_SCALE
+        side, across = max(8, round(size * scale)), max(8, round((width or size) * scale))
         render_ms, encode_ms, n = [], [], 0
         t_end = None
         i = 0
@@ -50,7 +53,7 @@ def measure(scene: str = "builtin:cornell-box", method: str = "restir-pt", size:
             pose = live.start_pose if mode == "still" else camera_pose(live.start_pose, sc.bounds(), "orbit",
                                                                          0.5, i)
             t0 = time.perf_counter()
-            frame = live.render(pose, side, side)
+            frame = live.render(pose, across, side)
             t1 = time.perf_counter()
             buf = io.BytesIO()
             Image.fromarray(tonemap(frame.average)).save(buf, format="JPEG", quality=90)
@@ -68,7 +71,7 @@ def measure(scene: str = "builtin:cornell-box", method: str = "restir-pt", size:
             if time.perf_counter() >= t_end:
                 break
         wall = time.perf_counter() - t_start
-        out[mode] = {"width": side, "height": side, "frames": n, "fps": n / wall,
+        out[mode] = {"width": across, "height": side, "frames": n, "fps": n / wall,
                      "render_ms_median": float(np.median(render_ms)), "encode_ms_median": float(np.median(encode_ms)),
                      "bytes_per_pixel": frame.stats["bytes_per_pixel"]["total"]}
     return out
@@ -107,7 +110,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", default="builtin:cornell-box")
     ap.add_argument("--method", default="restir-pt")
-    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--size", type=int, default=256, help="the film's height (and width, without --width)")
+    ap.add_argument("--width", type=int)
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--memory", type=float, metavar="SECONDS", help="the resident memory over this long instead")
@@ -115,7 +119,7 @@ def main() -> int:
     if args.memory:
         print(json.dumps(memory(args.scene, args.method, args.size, args.memory, args.device), indent=1))
         return 0
-    print(json.dumps(measure(args.scene, args.method, args.size, args.seconds, args.device), indent=1))
+    print(json.dumps(measure(args.scene, args.method, args.size, args.seconds, args.device, args.width), indent=1))
     return 0
 
 

@@ -15,6 +15,8 @@ fit is skipped and says so):
 - timing: each method's ms per frame, per stage, and bytes per pixel at each size on each scene,
   beside the path tracer's 1-spp frame in the same run (warm-up frames excluded, the device
   synchronised around every stage, the median of the measured frames);
+- view: `restir view`'s render loop without the browser (benchmarks/bench_view.py), ReSTIR PT on
+  the Cornell box at 1920 x 1080 still and at the reduced size while moving, in frames per second;
 - tests: pytest on the tests marked `gpu` with --device (determinism, shifts, Jacobians, MIS
   weights);
 - equal-time: `restir compare` of the path tracer, ReSTIR PT and Suffix ReSTIR at equal time,
@@ -62,13 +64,15 @@ class Sizes:
     equal_time_reference_spp: int = 1024
     equal_time_correlation_runs: int = 4
     test_selection: str | None = None  # a pytest -k expression; None: every test marked gpu
+    view_size: tuple = (1920, 1080)    # restir view's render loop (benchmarks/bench_view.py)
+    view_seconds: float = 10.0
 
 
 QUICK = Sizes(agreement_size=12, agreement_runs=4, agreement_frames=2, agreement_spp=(),
               timing_sizes=((32, 18), (48, 27)),
               timing_warmup=1, timing_frames=2, equal_time_size=(32, 18), equal_time_seconds=0.5,
               equal_time_reference_spp=16, equal_time_correlation_runs=3,
-              test_selection="bitwise_repeatable and pt")
+              test_selection="bitwise_repeatable and pt", view_size=(32, 18), view_seconds=0.5)
 
 
 def spp_of(method: str, s: "Sizes") -> int:
@@ -210,6 +214,17 @@ class Check:
             print(f"  {path} was made from other sources: the CPU runs are rendered here", flush=True)
             return {}
         return {k: data[k] for k in data.files if k != "source_hash"}
+
+    def view(self) -> dict:
+        """restir view's render loop (no browser): ReSTIR PT on the Cornell box at view_size still,
+        and moving at the viewer's reduced size, in frames per second."""
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location("bench_view", ROOT / "benchmarks" / "bench_view.py")
+        bench = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(bench)
+        w, h = self.sizes.view_size
+        return bench.measure("builtin:cornell-box", "restir-pt", h, self.sizes.view_seconds, self.args.device, w)
 
     def timing(self) -> dict:
         import restir
@@ -460,6 +475,14 @@ def markdown(r: dict) -> str:
                        [[x["scene"], x.get("size", ""), x.get("method", ""), "skipped", "", "", ""] if "skipped" in x
                         else [x["scene"], x["size"], x["method"], f"{x['ms_per_frame']:.2f}", x["ratio_to_pt"],
                               x["bytes_per_pixel"], f"{x['first_frame_ms']:.0f}"] for x in t["rows"]])
+    if "still" in ph.get("view", {}):
+        v = ph["view"]
+        lines += ["## restir view", "", f"{v['method']} on `{v['scene']}`: the render loop without the browser "
+                  "(benchmarks/bench_view.py).", ""]
+        lines += table(["camera", "film", "frames/s", "render ms", "encode ms"],
+                       [[m, f"{v[m]['width']}x{v[m]['height']}", f"{v[m]['fps']:.1f}", f"{v[m]['render_ms_median']:.1f}",
+                         f"{v[m]['encode_ms_median']:.1f}"] for m in ("still", "moving")])
+        lines.append("")
     if "counts" in ph.get("tests", {}):
         t = ph["tests"]
         lines += ["## Tests marked gpu", "", f"`{t['command']}`: {t['summary']} (exit {t['returncode']})", ""]
@@ -479,7 +502,7 @@ def markdown(r: dict) -> str:
     return "\n".join(lines)
 
 
-PHASES = ["environment", "agreement", "timing", "tests", "equal_time"]
+PHASES = ["environment", "agreement", "timing", "view", "tests", "equal_time"]
 
 
 def main(argv=None) -> int:
@@ -516,6 +539,7 @@ def main(argv=None) -> int:
     check.phase("environment", check.environment, 0)
     check.phase("agreement", check.agreement, 30)
     check.phase("timing", check.timing, 30)
+    check.phase("view", check.view, 30 if not args.quick else 5)
     check.phase("tests", check.tests, 60 if not args.quick else 5)
     check.phase("equal_time", check.equal_time, 60 if not args.quick else 5)
     check.write()

@@ -16,7 +16,7 @@ def test_the_gpu_check_runs_every_phase_at_toy_sizes(tmp_path):
     assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
     r = json.loads((tmp_path / "gpu_check.json").read_text())
     ph = r["phases"]
-    assert list(ph) == ["environment", "agreement", "timing", "tests", "equal_time"]
+    assert list(ph) == ["environment", "agreement", "timing", "view", "tests", "equal_time"]
     assert not [n for n, x in ph.items() if "error" in x or "skipped" in x]
     assert ph["environment"]["warp"] and ph["environment"]["warp_device"]["name"]
     rows = ph["agreement"]["rows"]
@@ -25,11 +25,13 @@ def test_the_gpu_check_runs_every_phase_at_toy_sizes(tmp_path):
     timing = ph["timing"]["rows"]
     assert {x["method"] for x in timing} == {"pt", "restir-di", "restir-pt", "suffix-restir"}
     assert all(x["ms_per_frame"] > 0 and x["bytes_per_pixel"] > 0 and x["stages_ms"] for x in timing)
+    assert ph["view"]["still"]["fps"] > 0 and ph["view"]["moving"]["width"] == 16  # half of 32 x 18
     assert ph["tests"]["returncode"] == 0 and ph["tests"]["counts"].get("passed", 0) >= 2
     methods = {m["method"] for m in ph["equal_time"]["methods"]}
     assert {"pt", "restir-pt", "suffix-restir"} <= methods
     md = (tmp_path / "gpu_check.md").read_text()
     assert "## Frame times" in md and "## Agreement with the CPU" in md and "## Equal time" in md
+    assert "## restir view" in md
     assert len(list(tmp_path.iterdir())) <= 8  # what one device call brings back
 
 
