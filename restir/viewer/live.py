@@ -156,3 +156,31 @@ class LiveRender:
         _, integ = self._integrator(width, height, fov_y)
         integ.view_pose = np.asarray(to_world, float)
         return compute_aovs(integ, ("albedo", "normal"), AOV_SAMPLES)
+
+    def reuse_maps(self) -> dict | None:
+        """For the methods with reservoirs, after the last frame: each pixel's confidence M, and
+        how many pixels of the frame hold the very same sample (1: its own; more: neighbours
+        took it over, which is what makes ReSTIR's blotches). None for the path tracer.
+
+        A sample's identity: a path's random seed and reconnection vertex (ReSTIR PT, Suffix
+        ReSTIR), or the light point (ReSTIR DI). Pixels without a sample (W = 0) count 0."""
+        if self._last is None:
+            return None
+        key = self._last[0][0]
+        integ = self.integrators.get(key)
+        res = getattr(integ, "reservoirs", None)
+        if res is None:
+            return None
+        a = res.previous.numpy()  # the frame's final reservoirs: the history of the next frame
+        h, w = key[1], key[0]
+        has = (a["W"] > 0) & (a["M"] > 0)
+        if "seed" in a.dtype.names:
+            ident = np.column_stack([a["seed"].astype(np.float64), a["rc_tri"].astype(np.float64),
+                                     a["rc_bary"].reshape(len(a), -1).astype(np.float64)])
+        else:
+            ident = np.column_stack([a["light_tri"].astype(np.float64), a["light_y"].reshape(len(a), -1)])
+        shared = np.zeros(len(a))
+        if has.any():
+            _, inverse, counts = np.unique(ident[has], axis=0, return_inverse=True, return_counts=True)
+            shared[has] = counts[inverse.reshape(-1)]
+        return {"confidence": a["M"].reshape(h, w).astype(np.float32), "shared": shared.reshape(h, w)}

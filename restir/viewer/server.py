@@ -25,9 +25,20 @@ from .controls import controls_for
 MOVING_S = 0.35
 MOVING_SCALE = 0.5
 IDLE_S = 10.0
-VIEWS = ("frame", "average", "denoised", "albedo", "normal", "error")
+VIEWS = ("frame", "average", "denoised", "albedo", "normal", "error", "confidence", "shared samples")
+FALSE_COLOUR = ("confidence", "shared samples")  # maps, shown in false colour without the exposure
 STATS_EVERY_S = 0.5
 MAX_FPS = 30.0  # frames sent at most per second: a small film renders faster than a browser can show
+
+
+def false_colour(x: np.ndarray) -> np.ndarray:
+    """Values in [0, 1] as linear RGB from dark blue through green to yellow (a map's view)."""
+    x = np.clip(np.nan_to_num(x), 0.0, 1.0)[..., None]
+    stops = np.array([[0.02, 0.02, 0.15], [0.0, 0.35, 0.45], [0.2, 0.7, 0.2], [1.0, 0.9, 0.1]])
+    t = x * (len(stops) - 1)
+    i = np.minimum(t.astype(int), len(stops) - 2)
+    f = t - i
+    return (stops[i[..., 0]] * (1 - f) + stops[i[..., 0] + 1] * f).astype(np.float32)
 
 
 class CameraState:
@@ -116,8 +127,10 @@ class Viewer:
             self.view_control = gui.add_dropdown("view", VIEWS, initial_value=self.view,
                                                  hint="the frame, the average since the camera or a setting last "
                                                       "changed, that average denoised (OIDN with albedo and normal), "
-                                                      "the first hit's albedo or normal, or the relative error "
-                                                      "against the reference")
+                                                      "the first hit's albedo or normal, the relative error "
+                                                      "against the reference, each pixel's confidence M (ReSTIR "
+                                                      "methods), or how many pixels hold the same sample (1 dark: "
+                                                      "its own; bright: taken over by many neighbours)")
             self.exposure_control = gui.add_slider("exposure", min=-8.0, max=8.0, step=0.25,
                                                    initial_value=self.exposure, hint="stops")
             self.pause_control = gui.add_checkbox("pause", False, hint="stop rendering new frames")
@@ -247,6 +260,16 @@ class Viewer:
         if self.view in ("albedo", "normal"):
             aov = self.live.aovs(self.frame_pose, f.image.shape[1], f.image.shape[0], self.frame_fov)[self.view]
             return 0.5 * (aov + 1.0) if self.view == "normal" else aov
+        if self.view in FALSE_COLOUR:
+            maps = self.live.reuse_maps()
+            if maps is None:
+                self.message = f"{self.view}: the path tracer keeps no reservoirs"
+                return f.average
+            if self.view == "confidence":
+                m = maps["confidence"]
+                return false_colour(m / max(float(m.max()), 1e-9))
+            shared = maps["shared"]  # 1 (its own sample) to many, on a log scale
+            return false_colour(np.log2(np.maximum(shared, 1.0)) / max(np.log2(max(float(shared.max()), 2.0)), 1e-9))
         if self.view == "error":
             ref = self.reference
             if ref is None or ref.shape != f.average.shape:
@@ -289,7 +312,7 @@ class Viewer:
             self.frame = self.live.render(cam.to_world, w, h, cam.fov_y)
             self.frame_pose, self.frame_fov = cam.to_world, cam.fov_y
             image = self.shown()
-        rgb = tonemap(image, self.exposure if self.view not in ("albedo", "normal", "error") else 0.0)
+        rgb = tonemap(image, self.exposure if self.view not in ("albedo", "normal", "error", *FALSE_COLOUR) else 0.0)
         self.server.scene.set_background_image(rgb, format="jpeg", jpeg_quality=90)
         self.frames_sent += 1
         self._times.append(time.time())
@@ -308,6 +331,14 @@ class Viewer:
                  f"{fps:.1f} frames/s · {st['frame_ms']:.0f} ms/frame · {st['rays_per_second'] / 1e6:.1f} Mrays/s · "
                  f"{st['bytes_per_pixel'].get('total', 0):.0f} B/px",
                  f"ms: {stages}", f"average of {f.frames_averaged} frames"]
+        if self.view in FALSE_COLOUR:
+            maps = self.live.reuse_maps()
+            if maps is not None:
+                m, shared = maps["confidence"], maps["shared"]
+                with_sample = shared > 0
+                lines.append(f"mean M {m.mean():.1f} (max {m.max():.0f}) · "
+                             f"{(shared > 1).sum() / max(with_sample.sum(), 1):.0%} of the samples shared, "
+                             f"the most by {shared.max():.0f} pixels")
         if self.message:
             lines.append(f"_{self.message}_")
         return "  \n".join(lines)

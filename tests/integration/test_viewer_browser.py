@@ -3,7 +3,8 @@ in this process (a thread) so that the test can read what it rendered and sent.
 
 The page loads and frames arrive; a drag in the canvas moves the camera and changes the image;
 switching the method and setting a value in the page change what is rendered (and a value the
-command line refuses is refused with its message, the previous value kept); the denoised view;
+command line refuses is refused with its message, the previous value kept); the confidence, shared
+samples and denoised views;
 saving writes the shown average (EXR and PNG, equal to it) and a camera that reproduces the
 view, whose path-traced render agrees with the saved image; two tabs at once; a closed tab stops
 the rendering. The command itself: a scene that fails to load is a one-line error before any
@@ -157,10 +158,15 @@ def test_switching_the_method_and_a_setting_change_the_frames(viewer, browser):
     assert viewer.frame.stats["method"] == "pt"
 
 
-def test_the_denoised_view(viewer, browser):
-    pytest.importorskip("pyoidn")
+def test_the_confidence_and_denoised_views(viewer, browser):
     d = browser(viewer.url)
     frames_after(viewer)
+    choose(d, "view", "confidence")
+    wait_for(lambda: "mean M" in viewer.status.content, 20, "the confidence numbers in the status")
+    choose(d, "view", "shared samples")
+    wait_for(lambda: viewer.view == "shared samples", 20, "the view to switch")
+    frames_after(viewer)
+    pytest.importorskip("pyoidn")
     choose(d, "view", "denoised")
     wait_for(lambda: viewer.view == "denoised", 20, "the view to switch")
     frames_after(viewer)

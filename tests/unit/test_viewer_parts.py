@@ -106,3 +106,24 @@ def test_a_refused_setting_keeps_the_previous_value_with_the_command_lines_messa
     live.set_method("pt")
     assert live.method == "pt" and live.settings == {} and not live.integrators
     assert live.render(live.start_pose, 24, 16).stats["method"] == "pt"
+
+
+def test_the_reuse_maps_count_the_pixels_that_share_a_sample():
+    """Spatial reuse hands samples to neighbours: some samples are then held by several pixels.
+    Without reuse every pixel keeps its own (seeds are per pixel), so none is shared; the path
+    tracer has no reservoirs."""
+    scene = restir.load_scene("builtin:cornell-box")
+    for settings, shared_expected in (({}, True), ({"temporal": False, "spatial.rounds": 0}, False)):
+        live = LiveRender(scene, "restir-pt", settings)
+        for _ in range(4):
+            live.render(live.start_pose, 24, 16)
+        maps = live.reuse_maps()
+        m, shared = maps["confidence"], maps["shared"]
+        assert m.shape == shared.shape == (16, 24) and m.min() >= 0
+        assert shared.min() >= 0 and np.all(shared == np.round(shared)) and (shared >= 1).any()
+        assert (shared.max() > 1) == shared_expected, shared.max()
+        if shared_expected:
+            assert m.max() > 1  # temporal and spatial reuse add confidence
+    live = LiveRender(scene, "pt")
+    live.render(live.start_pose, 8, 8)
+    assert live.reuse_maps() is None
