@@ -10,7 +10,7 @@ import pygltflib as g
 
 def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_required=(), images=()):
     """meshes: [(vertices (N, 3), faces (M, 3), material index or None, extras)] where extras may
-    hold "normals", "uvs" (N, 2), "matrix" (4x4, node transform); materials: [dict of glTF JSON];
+    hold "normals", "uvs" (N, 2), "tangents" (N, 4), "matrix" (4x4, node transform); materials: [dict of glTF JSON];
     camera: (world matrix of the camera node (looks down -Z), yfov radians, aspect, name);
     lights: [(light JSON, world matrix of its node)]; images: [PNG bytes]."""
     blob = bytearray()
@@ -35,6 +35,8 @@ def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_requi
             attrs.NORMAL = add(extras["normals"], g.VEC3, g.ARRAY_BUFFER)
         if "uvs" in extras:
             attrs.TEXCOORD_0 = add(extras["uvs"], g.VEC2, g.ARRAY_BUFFER)
+        if "tangents" in extras:
+            attrs.TANGENT = add(extras["tangents"], g.VEC4, g.ARRAY_BUFFER)
         idx = add(np.asarray(faces).reshape(-1), g.SCALAR, g.ELEMENT_ARRAY_BUFFER, g.UNSIGNED_INT)
         gl_meshes.append(g.Mesh(primitives=[g.Primitive(attributes=attrs, indices=idx, material=mat)]))
         node = g.Node(mesh=len(gl_meshes) - 1)

@@ -38,8 +38,9 @@ def shading_frame(scene: SceneDevice, hit: SurfaceHit, wi: wp.vec3) -> Frame:
     b = scene.material_bump[material_index_at(scene, hit.tri, hit.uv)]
     if b.texture < 0:
         return frame_from_normal(hit.ns)
-    return frame_from_normal(bump_normal(scene.positions, scene.uvs, scene.textures, scene.tex_pixels, b, hit.tri,
-                                         hit.uv, hit.ng, hit.ns, wi))
+    return frame_from_normal(bump_normal(scene.positions, scene.uvs, scene.tangents, scene.has_tangents,
+                                         scene.textures, scene.tex_pixels, b, hit.tri, hit.bary, hit.uv, hit.ng,
+                                         hit.ns, wi))
 
 
 @wp.func

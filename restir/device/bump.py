@@ -11,7 +11,9 @@ factors that make it a BSDF of the unperturbed surface.
     s = dp/du made orthogonal to ns and t = ns x s, as Mitsuba 3 and pbrt-v4 read it; `strength`
     multiplies its first two components (glTF's normalTexture.scale). With `uv_handed` (glTF's
     tangent space, MikkTSpace's bitangent sign) t turns to point against dp/dv, toward the
-    image's top, on triangles whose uv mapping is mirrored.
+    image's top, on triangles whose uv mapping is mirrored. A triangle with given tangents (a
+    glTF file's TANGENT: SceneDevice.tangents, sign w != 0) uses them instead: s is the
+    interpolated tangent made orthogonal to ns, and t = w (ns x s), glTF's bitangent.
   `flip_invalid_normals` (Mitsuba's default): where wi lies on different sides of ns and n, n is
   mirrored about ns, so the camera side always sees the front.
 - `bump_factor`: directions wo on different sides of ns and n carry nothing (Mitsuba's
@@ -45,12 +47,12 @@ class Bump:
 
 
 @wp.func(inline=False)  # out of line as scene_device.texture_lookup: only bump-mapped hits call it
-def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2), textures: wp.array(dtype=Texture),
-                texels: wp.array(dtype=wp.vec3), b: Bump, tri: int, uv: wp.vec2, ng: wp.vec3, ns: wp.vec3,
-                wi: wp.vec3) -> wp.vec3:
-    """The tilted shading normal at a hit (triangle, uv, geometric and shading normals; the
-    hit's fields, passed apart since SurfaceHit's module needs SceneDevice, which holds a Bump),
-    wi (world, toward the previous vertex) deciding the flip of an invalid one."""
+def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2), tangents: wp.array(dtype=wp.vec4),
+                has_tangents: int, textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), b: Bump,
+                tri: int, bary: wp.vec2, uv: wp.vec2, ng: wp.vec3, ns: wp.vec3, wi: wp.vec3) -> wp.vec3:
+    """The tilted shading normal at a hit (triangle, barycentrics, uv, geometric and shading
+    normals; the hit's fields, passed apart since SurfaceHit's module needs SceneDevice, which
+    holds a Bump), wi (world, toward the previous vertex) deciding the flip of an invalid one."""
     i0 = 3 * tri
     dp0 = positions[i0 + 1] - positions[i0]
     dp1 = positions[i0 + 2] - positions[i0]
@@ -69,7 +71,10 @@ def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2)
         dp_dv = f.t
     n = wp.vec3(0.0)
     if b.kind == PERTURB_NORMAL:
-        n = normal_map_normal(textures, texels, b, uv, ns, dp_du, dp_dv)
+        given = wp.vec4(0.0)
+        if has_tangents != 0:
+            given = tangents[i0] * bary[0] + tangents[i0 + 1] * bary[1] + tangents[i0 + 2] * (1.0 - bary[0] - bary[1])
+        n = normal_map_normal(textures, texels, b, uv, ns, dp_du, dp_dv, given)
     else:
         g = b.scale * texture_grad1(textures, texels, b.texture, uv)
         du = dp_du + ns * (g[0] - wp.dot(ns, dp_du))
@@ -87,17 +92,23 @@ def bump_normal(positions: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2)
 
 @wp.func
 def normal_map_normal(textures: wp.array(dtype=Texture), texels: wp.array(dtype=wp.vec3), b: Bump, uv: wp.vec2,
-                      ns: wp.vec3, dp_du: wp.vec3, dp_dv: wp.vec3) -> wp.vec3:
-    """A normal map's (unnormalized) normal in world space: 2c - 1 in the frame (s, t, ns)."""
+                      ns: wp.vec3, dp_du: wp.vec3, dp_dv: wp.vec3, given: wp.vec4) -> wp.vec3:
+    """A normal map's (unnormalized) normal in world space: 2c - 1 in the frame (s, t, ns); the
+    frame from the given tangent (xyz, and the bitangent's sign w) where w != 0."""
     c = texture_eval(textures, texels, b.texture, uv)
-    s = dp_du - ns * wp.dot(ns, dp_du)
+    along = dp_du
+    if given[3] != 0.0:
+        along = wp.vec3(given[0], given[1], given[2])
+    s = along - ns * wp.dot(ns, along)
     ls = wp.length(s)
     if ls > 0.0:
         s = s / ls
-    else:  # dp/du along ns: any tangent (Mitsuba's fallback is as arbitrary)
+    else:  # the tangent along ns: any tangent (Mitsuba's fallback is as arbitrary)
         s = frame_from_normal(ns).s
     t = wp.cross(ns, s)
-    if b.uv_handed != 0 and wp.dot(t, dp_dv) > 0.0:
+    if given[3] < 0.0:
+        t = -t
+    elif given[3] == 0.0 and b.uv_handed != 0 and wp.dot(t, dp_dv) > 0.0:
         t = -t
     return (b.scale * (2.0 * c[0] - 1.0)) * s + (b.scale * (2.0 * c[1] - 1.0)) * t + (2.0 * c[2] - 1.0) * ns
 

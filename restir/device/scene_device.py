@@ -26,6 +26,8 @@ class SceneDevice:
     positions: wp.array(dtype=wp.vec3)    # 3 per triangle
     normals: wp.array(dtype=wp.vec3)      # 3 per triangle (shading normals; unused where tri_smooth=0)
     uvs: wp.array(dtype=wp.vec2)          # 3 per triangle
+    tangents: wp.array(dtype=wp.vec4)     # 3 per triangle where has_tangents (normal maps' given frames), else 1
+    has_tangents: int
     tri_smooth: wp.array(dtype=wp.int32)  # 1: interpolate `normals`; 0: flat (geometric) shading
     tri_material: wp.array(dtype=wp.int32)
     tri_emission: wp.array(dtype=wp.vec3)  # area-emitter radiance (front side), 0 if not emissive

@@ -149,6 +149,7 @@ class Scene:
     textures: list[TextureDesc] = field(default_factory=list)
     delta_lights: list[DeltaLightDesc] = field(default_factory=list)
     tri_emit_twosided: np.ndarray | None = None  # (T,) bool: an area emitter that emits from both sides
+    tangents: np.ndarray | None = None  # (T, 3, 4): normal maps' given tangents and bitangent signs (sign 0: none)
 
     @property
     def num_triangles(self) -> int:
@@ -266,10 +267,14 @@ class _Builder:
         twosided = None
         if any(p[6] for p in self.parts):
             twosided = np.concatenate([np.full(len(p[0]), p[6], bool) for p in self.parts])
+        tangents = None
+        if any(p[7] is not None for p in self.parts):  # sign 0: no tangent given (derived from the uvs)
+            tangents = np.concatenate([p[7] if p[7] is not None else np.zeros((len(p[0]), 3, 4))
+                                       for p in self.parts]).astype(np.float32)
         env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
         return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
                      self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
-                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights, twosided)
+                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights, twosided, tangents)
 
     def integrator(self, obj):
         p = self.props(obj, "integrator")
@@ -798,6 +803,7 @@ class _Builder:
         pos = transform_points(to_world, mesh.positions.reshape(-1, 3)).reshape(-1, 3, 3)
         nrm = transform_normals(to_world, mesh.normals.reshape(-1, 3)).reshape(-1, 3, 3) if mesh.normals is not None else None
         uvs = mesh.uvs
+        tangents = getattr(mesh, "tangents", None)  # (T, 3, 4), from a triangles shape (glTF), already in world space
         analytic = t in ("rectangle", "disk", "sphere", "trimesh")
         if analytic and np.linalg.det(to_world[:3, :3]) < 0:
             # Mitsuba's analytic shapes keep their normal under mirroring transforms.
@@ -805,17 +811,21 @@ class _Builder:
         if flip:
             pos, uvs = pos[:, ::-1], uvs[:, ::-1]
             nrm = -nrm[:, ::-1] if nrm is not None else None
+            if tangents is not None:  # the normal turned: the bitangent keeps its direction by its sign
+                tangents = tangents[:, ::-1] * np.array([1.0, 1.0, 1.0, -1.0])
         smooth = 0 if (face_normals or nrm is None or t in ("rectangle", "disk", "trimesh")) else 1
         if nrm is None:
             nrm = np.zeros_like(pos)
         area = 0.5 * np.linalg.norm(np.cross(pos[:, 1] - pos[:, 0], pos[:, 2] - pos[:, 0]), axis=1)
         keep = area > 0
         pos, nrm, uvs = pos[keep], nrm[keep], uvs[keep]
+        tangents = tangents[keep] if tangents is not None else None
         if mesh.emission is not None and emitter_obj is not None:  # per-triangle radiance (a triangles shape's)
             emission = np.asarray(mesh.emission, np.float64)[keep]
         p.warn_unqueried()
         if len(pos):
-            self.parts.append((pos, nrm, uvs, smooth, mat, emission, twosided and bool(np.any(emission > 0))))
+            self.parts.append((pos, nrm, uvs, smooth, mat, emission, twosided and bool(np.any(emission > 0)),
+                               tangents))
         else:  # legal (Mitsuba renders it as nothing) but surely not what was meant
             what = "an emitter" if np.any(emission > 0) else "a shape"
             warn(f"{what} whose every triangle has zero area: it is left out of the image", p.loc)

@@ -21,6 +21,7 @@ class TriMesh:
     normals: np.ndarray | None
     uvs: np.ndarray
     emission: np.ndarray | None = None  # (T, 3) per-triangle radiance, replacing the emitter's (glTF's textures)
+    tangents: np.ndarray | None = None  # (T, 3, 4) per corner: a normal map's tangent and bitangent sign (glTF)
 
 
 def barycentric_uvs(num_triangles: int) -> np.ndarray:

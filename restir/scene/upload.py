@@ -123,6 +123,9 @@ class DeviceScene:
         s.positions = self.mesh.points
         s.normals = self._arr(sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
         s.uvs = self._arr(sc.uvs.reshape(-1, 2).astype(np.float32), wp.vec2)
+        s.has_tangents = int(sc.tangents is not None)
+        s.tangents = self._arr(sc.tangents.reshape(-1, 4) if sc.tangents is not None else np.zeros((1, 4), np.float32),
+                               wp.vec4)
         s.tri_smooth = self._arr(sc.tri_smooth.astype(np.int32), wp.int32)
         s.tri_material = self._arr(sc.tri_material.astype(np.int32), wp.int32)
         s.tri_emission = self._arr(sc.tri_emission.astype(np.float32), wp.vec3)

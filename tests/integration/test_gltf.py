@@ -205,6 +205,43 @@ def test_a_normal_map_tilts_toward_the_images_top_on_mirrored_uvs_too(tmp_path):
     assert centre(straight, {"index": 0, "scale": 0.0}) == pytest.approx(flat, rel=1e-4)
 
 
+def test_a_files_tangents_give_the_normal_maps_frame(tmp_path):
+    """TANGENT (xyz, w) per vertex: the map's +Y (green) is w (n x tangent), glTF's bitangent. On
+    the plane of the test above (image top at world +Y, n = +Z), the tangent -X with w = 1, or +X
+    with w = -1, puts the map's +Y on world -Y: the tilt toward the image's top now points away
+    from the sun, and the plane is darker than flat; +X with w = 1 is the frame derived from the
+    uvs."""
+    a = math.radians(30)
+    png = _png(np.round((np.array([0.0, math.sin(a), math.cos(a)]) + 1) * 127.5))
+    v, f = plane(1.0)
+    uvs = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], float)
+    sun = np.eye(4)
+    b = math.radians(50)
+    sun[:3, :3] = [[1, 0, 0], [0, math.cos(b), math.sin(b)], [0, -math.sin(b), math.cos(b)]]
+    light = ({"type": "directional", "color": [1, 1, 1], "intensity": 2.0}, sun)
+
+    def centre(tangent=None, normal_map=True):
+        extras = {"uvs": uvs}
+        if tangent is not None:
+            extras["tangents"] = np.tile(np.asarray(tangent, float), (4, 1))
+        mat = mr([0.8, 0.8, 0.8])
+        if normal_map:
+            mat["normalTexture"] = {"index": 0}
+        path = write_gltf(tmp_path / f"t{len(list(tmp_path.iterdir()))}.glb", [(v, f, 0, extras)], [mat],
+                          camera=(top_down_camera(2.0), math.radians(30), 1.0, "c"), lights=[light],
+                          images=[png] if normal_map else [])
+        scene = restir.load_scene(path)
+        assert (scene.tangents is not None) == (tangent is not None and normal_map)
+        return restir.render(scene, method="pt", spp=1, width=8, height=8, seed=1).image[4, 4].mean()
+
+    flat, derived = centre(normal_map=False), centre()
+    assert derived > 1.1 * flat
+    assert centre([1, 0, 0, 1]) == pytest.approx(derived, rel=1e-4)
+    assert centre([-1, 0, 0, 1]) < 0.9 * flat
+    assert centre([1, 0, 0, -1]) == pytest.approx(centre([-1, 0, 0, 1]), rel=1e-4)
+    assert centre([1, 0, 0, 1], normal_map=False) == pytest.approx(flat, rel=1e-6)  # no map: not read
+
+
 def test_a_double_sided_emissive_material_lights_both_sides(tmp_path):
     v, f = plane(1.0)
     below = np.diag([1.0, -1.0, -1.0, 1.0])  # a camera under the plane, looking up +Z

@@ -142,15 +142,12 @@ class _Reader:
             attrs = prim.attributes
             if attrs.POSITION is None:
                 raise SceneError(f"{what} has no POSITION", self.path)
-            if attrs.TANGENT is not None and self.materials.normal_mapped(prim.material):
-                self.materials.warn_once("tangent", "TANGENT attributes are not read: a normal map's tangent frame "
-                                         "is derived from each triangle's uv mapping (MikkTSpace's, without its "
-                                         "smoothing across triangles)")
             if attrs.COLOR_0 is not None:
                 warn(f"{what}: its vertex colours (COLOR_0) are not applied to the base colour", self.path)
             bsdf, emission, emission_tex = self.materials.material(prim.material)
             self.positions.append((attrs.POSITION, m, what))
-            shape = {"type": "triangles", "load": self._loader(what, prim, mode, m, emission_tex, emission),
+            tangents = attrs.TANGENT is not None and self.materials.normal_mapped(prim.material)
+            shape = {"type": "triangles", "load": self._loader(what, prim, mode, m, emission_tex, emission, tangents),
                      "bsdf": bsdf, "_loc": self.path}
             if np.any(emission > 0):
                 # a double-sided material lights its back face too (its normals reversed there)
@@ -158,7 +155,7 @@ class _Reader:
                                     "twosided": self.materials.double_sided(prim.material)}
             self.shapes.append(shape)
 
-    def _loader(self, what, prim, mode, m, emission_tex, emission):
+    def _loader(self, what, prim, mode, m, emission_tex, emission, read_tangents=False):
         def load() -> TriMesh:
             a = prim.attributes
             p = self.buffers.accessor(a.POSITION, what)
@@ -193,13 +190,22 @@ class _Reader:
                 nn /= np.maximum(np.linalg.norm(nn, axis=1, keepdims=True), 1e-30)
                 nrm = nn[f]
             uvs = uv[f][..., :2] if uv is not None else np.zeros((len(f), 3, 2))
+            tan = None
+            if read_tangents:  # a normal map's tangent (xyz, a direction on the surface) and bitangent sign
+                t = self.buffers.accessor(a.TANGENT, what)
+                if t.shape[1] != 4 or len(t) != len(p):
+                    raise SceneError(f"{what}: TANGENT is not a VEC4 per vertex", self.path)
+                tan = np.concatenate([t[:, :3] @ m[:3, :3].T, np.sign(t[:, 3:4]) + (t[:, 3:4] == 0)], 1)[f]
+                if np.linalg.det(m[:3, :3]) < 0:  # a mirror turns the bitangent's handedness
+                    tan[..., 3] *= -1
             if np.linalg.det(m[:3, :3]) < 0:  # a mirroring node keeps the front face (glTF: by the winding)
                 pos, uvs = pos[:, ::-1], uvs[:, ::-1]
                 nrm = nrm[:, ::-1] if nrm is not None else None
+                tan = tan[:, ::-1] if tan is not None else None
             per_tri = None
             if emission_tex is not None:
                 per_tri = emission[None] * _mean_over_triangles(emission_tex, uvs)
-            return TriMesh(pos, nrm, uvs, per_tri)
+            return TriMesh(pos, nrm, uvs, per_tri, tan)
 
         return load
 
