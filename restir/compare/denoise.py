@@ -70,8 +70,14 @@ class Denoiser:
         require_oidn()
         cfg = dataclasses.replace(base, method="pt", settings={}, spp=1, frames=1)
         aux = compute_aovs(make_integrator(sized_scene(scene, cfg), cfg), ("albedo", "normal"), AOV_SAMPLES)
+        return cls.from_guides(aux, base.device)
+
+    @classmethod
+    def from_guides(cls, aux: dict, device: str) -> "Denoiser":
+        """From the albedo and normal layers (restir/aov.py), OIDN on the GPU where the renderer's
+        device is CUDA and PyTorch reaches it."""
         return cls(np.clip(aux["albedo"], 0.0, 1.0).astype(np.float32), aux["normal"].astype(np.float32),
-                   device="cuda" if str(base.device).startswith("cuda") and _torch_cuda() else "cpu")
+                   device="cuda" if str(device).startswith("cuda") and _torch_cuda() else "cpu")
 
     def __call__(self, frame) -> np.ndarray:
         import pyoidn

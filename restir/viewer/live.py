@@ -57,6 +57,8 @@ class LiveRender:
         self.frame_index = 0
         self._last = None            # (key, pose) of the last frame: the running average's
         self._sum, self._count = None, 0
+        self._aovs = None            # (key, pose bytes, generation, guides): one view's, kept while it stands
+        self._maps = None            # (frame_index, maps) of the last frame
         self.generation = 0          # counts rebuilds (a setting or the method changed)
 
     # ------------------------------------------------------------------ settings
@@ -104,13 +106,19 @@ class LiveRender:
         self._last = None
 
     # ------------------------------------------------------------------ frames
+    def camera(self, width: int, height: int, fov_y: float, to_world=None):
+        """The scene's camera (a copy) at that film size and vertical field of view, and pose."""
+        cd = copy.copy(self.scene.camera)
+        cd.width, cd.height, cd.fov, cd.fov_axis = int(width), int(height), float(fov_y), "y"
+        if to_world is not None:
+            cd.to_world = np.asarray(to_world, float)
+        return cd
+
     def _integrator(self, width: int, height: int, fov_y: float):
         key = (int(width), int(height), round(float(fov_y), 4))
         integ = self.integrators.pop(key, None)
         if integ is None:
-            cd = copy.copy(self.scene.camera)
-            cd.width, cd.height, cd.fov, cd.fov_axis = key[0], key[1], key[2], "y"
-            dscene = self.dscene.with_camera(cd)
+            dscene = self.dscene.with_camera(self.camera(*key))
             cfg = dataclasses.replace(self.config, width=key[0], height=key[1])
             integ = make_integrator(dscene.host, cfg, self.on_compile, dscene=dscene)
             while len(self.integrators) >= MAX_INTEGRATORS:
@@ -149,13 +157,18 @@ class LiveRender:
         return ViewFrame(mean, (self._sum / self._count).astype(np.float32), self._count, stats)
 
     def aovs(self, to_world, width: int, height: int, fov_y: float | None = None) -> dict:
-        """The albedo and normal at the first hit from that view (the denoiser's guides)."""
+        """The albedo and normal at the first hit from that view (the denoiser's guides),
+        computed once while the view stands."""
         from ..aov import AOV_SAMPLES, compute_aovs
 
         fov_y = self.start_fov_y if fov_y is None else fov_y
-        _, integ = self._integrator(width, height, fov_y)
-        integ.view_pose = np.asarray(to_world, float)
-        return compute_aovs(integ, ("albedo", "normal"), AOV_SAMPLES)
+        pose = np.asarray(to_world, float)
+        key, integ = self._integrator(width, height, fov_y)
+        tag = (key, pose.tobytes(), self.generation)
+        if self._aovs is None or self._aovs[0] != tag:
+            integ.view_pose = pose
+            self._aovs = (tag, compute_aovs(integ, ("albedo", "normal"), AOV_SAMPLES))
+        return self._aovs[1]
 
     def reuse_maps(self) -> dict | None:
         """For the methods with reservoirs, after the last frame: each pixel's confidence M, and
@@ -166,6 +179,8 @@ class LiveRender:
         ReSTIR), or the light point (ReSTIR DI). Pixels without a sample (W = 0) count 0."""
         if self._last is None:
             return None
+        if self._maps is not None and self._maps[0] == self.frame_index:
+            return self._maps[1]
         key = self._last[0][0]
         integ = self.integrators.get(key)
         res = getattr(integ, "reservoirs", None)
@@ -183,4 +198,6 @@ class LiveRender:
         if has.any():
             _, inverse, counts = np.unique(ident[has], axis=0, return_inverse=True, return_counts=True)
             shared[has] = counts[inverse.reshape(-1)]
-        return {"confidence": a["M"].reshape(h, w).astype(np.float32), "shared": shared.reshape(h, w)}
+        maps = {"confidence": a["M"].reshape(h, w).astype(np.float32), "shared": shared.reshape(h, w)}
+        self._maps = (self.frame_index, maps)
+        return maps

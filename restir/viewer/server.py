@@ -10,6 +10,7 @@ The controls are made from the methods' typed settings (controls.py). A value th
 would refuse is refused here with the same message, shown in the page, and the previous value
 stays. With no tab open for IDLE_S the loop stops rendering until one connects.
 """
+import copy
 import math
 import os
 import threading
@@ -234,20 +235,12 @@ class Viewer:
             if self.frame is None:
                 return
             h, w = self.frame.image.shape[:2]
-            scene = self._scene_at(self.frame_pose, self.frame_fov, w, h)
+            scene = copy.copy(self.live.scene)
+            scene.camera = self.live.camera(w, h, self.frame_fov, self.frame_pose)
             self.message = "rendering the path-traced reference..."
             self.reference = render(scene, method="pt", spp=4, frames=frames, seed=7,
                                     device=self.live.config.device).image
             self.message = f"reference: the path tracer, {4 * frames} spp, from this camera"
-
-    def _scene_at(self, pose, fov_y, w, h):
-        import copy
-
-        scene = copy.copy(self.live.scene)
-        scene.camera = copy.copy(scene.camera)
-        scene.camera.to_world, scene.camera.fov, scene.camera.fov_axis = np.asarray(pose, float), fov_y, "y"
-        scene.camera.width, scene.camera.height = w, h
-        return scene
 
     # ------------------------------------------------------------------ the loop
     def shown(self) -> np.ndarray:
@@ -286,8 +279,7 @@ class Viewer:
             try:
                 require_oidn()
                 aux = self.live.aovs(self.frame_pose, image.shape[1], image.shape[0], self.frame_fov)
-                self._denoiser = (key, Denoiser(np.clip(aux["albedo"], 0, 1).astype(np.float32),
-                                                aux["normal"].astype(np.float32)))
+                self._denoiser = (key, Denoiser.from_guides(aux, self.live.config.device))
             except ConfigError as e:
                 self.message = str(e)
                 return image
