@@ -1,6 +1,7 @@
 """restir: a research renderer for resampled path tracing on NVIDIA Warp.
 
-Public API: `load_scene`, `render`, `view`, `write_image`, `RenderConfig`, `RenderResult`.
+Public API: `load_scene`, `render`, `view`, `write_image`, `RenderConfig`, `RenderResult`, and for
+animated scenes `animate`, `Motion`, `Keyframes`.
 """
 import os as _os
 import re as _re
@@ -24,9 +25,10 @@ if _flags is not None and "inline-threshold=" in _flags:
 
 from .api import RenderResult, load_scene, render, write_image
 from .config import ConfigError, RenderConfig
+from .scene.animation import Keyframes, Motion, animate
 from .scene.errors import SceneError, SceneWarning
 from .viewer import view
 
 __all__ = ["load_scene", "render", "view", "write_image", "RenderConfig", "RenderResult", "SceneError", "SceneWarning",
-           "ConfigError"]
+           "ConfigError", "animate", "Motion", "Keyframes"]
 __version__ = "0.1.0"

@@ -2,6 +2,8 @@
 import numpy as np
 import warp as wp
 
+import restir
+
 from restir.scene.scene import build_scene
 from restir.scene.upload import DeviceScene
 
@@ -164,3 +166,32 @@ V3 = """<scene version="3.0.0">
     <shape type="rectangle"><ref id="checks"/><transform name="to_world"><translate x="0.5"/></transform></shape>
     <shape type="rectangle"><ref name="bsdf" id="coat"/><boolean name="flip_normals" value="true"/></shape>
 </scene>"""
+
+
+# ------------------------------------------------------------------ scenes in motion (8 frames)
+MOTION_KINDS = ("occluder", "light", "switch", "appear", "all")
+
+
+def motion_scene(kind: str):
+    """The Cornell box with one kind of motion over 8 frames, fast enough that every frame
+    uncovers or covers pixels (at 32x32 a pixel is about 1.7 cm of the back wall):
+    occluder: the short block slides 2.5 cm a frame toward the red wall (its shadow and the floor
+    behind it move); light: the light swings 3 cm a frame along x and back; switch: the light is
+    off in frames 3 and 4; appear: the tall block is gone (100 m below the floor) in frames 2 to 4;
+    all: the four together."""
+    from restir.scene.animation import Motion, animate
+
+    scene = restir.load_scene("builtin:cornell-box")
+    motions = {}
+    if kind in ("occluder", "all"):
+        motions["short"] = Motion(translation=([0, 7], [[0, 0, 0], [0.175, 0, -0.05]]))
+    light = {}
+    if kind in ("light", "all"):
+        light["translation"] = ([0, 3, 7], [[-0.06, 0, 0], [0.03, 0, 0.02], [-0.09, 0, 0]])
+    if kind in ("switch", "all"):
+        light["emission"] = ([0, 3, 5], [[1.0], [0.0], [1.0]], "step")
+    if light:
+        motions["light"] = Motion(**light)
+    if kind in ("appear", "all"):
+        motions["tall"] = Motion(translation=([0, 2, 5], [[0, 0, 0], [0, -100, 0], [0, 0, 0]], "step"))
+    return animate(scene, motions)

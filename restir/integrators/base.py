@@ -49,6 +49,9 @@ class Integrator:
     stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
+    # the method's temporal-reuse settings whose history is not yet evaluated in the previous
+    # frame's scene: refused on an animated scene (api.method_settings) rather than biased
+    STATIC_SCENE_TEMPORAL: tuple[str, ...] = ()
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
@@ -162,6 +165,7 @@ class Integrator:
 
     def render_frame(self, frame: int) -> tuple[np.ndarray, np.ndarray]:
         """One frame: (mean, variance) per pixel over its samples, each (H, W, 3)."""
+        self.dscene.set_frame(frame)  # an animated scene's geometry and lights at this frame
         camera = self.camera(frame)
         spp = int(self.settings.spp)
         for begin, end in self.sample_batches(spp):

@@ -291,8 +291,28 @@ def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.
     return scene
 
 
+ANIMATED_FRAMES = 64  # the animated Cornell box's period
+
+
+def cornell_box_animated(**kw) -> dict:
+    """The Cornell box in motion over 64 frames (then it holds its last pose): the short block
+    slides across the floor toward the red wall and back; the light swings along x, and is
+    switched off for frames 24 to 31 (docs/guide/animation.md)."""
+    from .animation import Animation, Motion
+
+    scene = cornell_box(**kw)
+    n = ANIMATED_FRAMES
+    scene["_animation"] = Animation({
+        "short": Motion(translation=([0, n // 2, n], [[0, 0, 0], [0.22, 0, -0.06], [0, 0, 0]])),
+        "light": Motion(translation=([0, n // 4, 3 * n // 4, n], [[0, 0, 0], [0.1, 0, 0], [-0.1, 0, 0], [0, 0, 0]]),
+                        emission=([0, 24, 32], [[1.0], [0.0], [1.0]], "step")),
+    }, frames=n)
+    return scene
+
+
 BUILTINS = {
     "cornell-box": cornell_box,
+    "cornell-box-animated": cornell_box_animated,
     "cornell-box-glossy": lambda **kw: cornell_box(glossy=True, **kw),
     "furnace": furnace,
     "sphere-cap": sphere_cap,
@@ -306,6 +326,8 @@ BUILTINS = {
 BUILTIN_DESCRIPTIONS = {
     "cornell-box": "the Cornell box (measured geometry, RGB materials), 512x512, 16 spp, unbounded depth",
     "cornell-box-glossy": "the Cornell box with a rough-conductor tall block and Beckmann back wall",
+    "cornell-box-animated": "the Cornell box in motion over 64 frames: the short block slides, the light swings and "
+                            "is off for frames 24-31",
     "furnace": f"closed emitting sphere, albedo 0.5: every pixel 1 - 0.5^max_depth; max_depth "
                f"{ANALYTIC_MAX_DEPTH} by default (truncates 0.5^{ANALYTIC_MAX_DEPTH}; -1: unbounded, 1)",
     "sphere-cap": f"closed diffuse sphere lit by an emissive cap, analytic radiance "

@@ -5,7 +5,7 @@ import numpy as np
 
 from .errors import SceneError, warn
 
-_META = {"type", "_loc", "_kind", "id", "_ids", "_base_dir"}
+_META = {"type", "_loc", "_kind", "id", "_ids", "_base_dir", "_animation"}
 
 
 class Props:

@@ -150,6 +150,10 @@ class Scene:
     delta_lights: list[DeltaLightDesc] = field(default_factory=list)
     tri_emit_twosided: np.ndarray | None = None  # (T,) bool: an area emitter that emits from both sides
     tangents: np.ndarray | None = None  # (T, 3, 4): normal maps' given tangents and bitangent signs (sign 0: none)
+    # named objects an animation can move: a shape's triangles [start, stop), a delta light's index
+    objects: dict = field(default_factory=dict)
+    delta_light_names: dict = field(default_factory=dict)
+    animation: object = None  # scene/animation.py Animation, or None: a static scene
 
     @property
     def num_triangles(self) -> int:
@@ -230,13 +234,23 @@ class _Builder:
     def build(self) -> Scene:
         root = Props(self.tree, self.ids)
         children = root.children()
+        names = {id(v): k for k, v in self.tree.items() if isinstance(v, dict)}
+        objects, delta_names, tris = {}, {}, 0
         for done, obj in enumerate(children):
             if self.progress is not None:
                 self.progress(done, len(children))
             kind = self.kind_of(obj)
+            name = obj.get("id") or names.get(id(obj), "")
             if kind == "shape":
+                first = len(self.parts)
                 self.shape(obj)
+                added = sum(len(p[0]) for p in self.parts[first:])
+                if name and not name.startswith("_") and added:
+                    objects[name] = (tris, tris + added)
+                tris += added
             elif kind == "emitter" and obj.get("type") in DELTA_EMITTERS:
+                if name and not name.startswith("_"):
+                    delta_names[name] = len(self.delta_lights)
                 self.delta_lights.append(self.delta_light(obj))
             elif kind == "emitter":
                 self.environment(obj)
@@ -274,7 +288,8 @@ class _Builder:
         env_kind, env_rad, env_rot, env_img = self.env or ("none", np.zeros(3), np.eye(3), None)
         return Scene(self.name, pos, nrm, uvs, smooth, mat, emis, self.materials, self.camera,
                      self.spp, self.max_depth, self.rr_depth, self.hide_emitters,
-                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights, twosided, tangents)
+                     env_kind, env_rad, env_rot, env_img, self.textures, self.delta_lights, twosided, tangents,
+                     objects, delta_names)
 
     def integrator(self, obj):
         p = self.props(obj, "integrator")
@@ -920,5 +935,13 @@ def build_scene(tree: dict, name: str = "scene", missing_textures: str = "error"
     """Build a host Scene from a Mitsuba-style scene dict; `missing_textures` (MISSING_TEXTURES)
     says what a bitmap whose file is missing becomes: an error, or constant grey with a warning.
     `progress(done, total)`, when given, is called before each top-level element (shapes, the
-    sensor, emitters) and once at the end: meshes are read there, most of a large scene's load."""
-    return _Builder(tree, name, missing_textures, progress).build()
+    sensor, emitters) and once at the end: meshes are read there, most of a large scene's load.
+    A tree's "_animation" (scene/animation.py Animation: a builtin's, a glTF file's) animates the
+    scene."""
+    scene = _Builder(tree, name, missing_textures, progress).build()
+    if tree.get("_animation") is not None:
+        from .animation import animate
+
+        a = tree["_animation"]
+        scene = animate(scene, a.motions, a.callback, a.frames)
+    return scene

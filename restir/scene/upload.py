@@ -18,6 +18,7 @@ from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONS
                             MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
+from .animation import posed_scene
 from .scene import TEXTURED_PARAMETERS, Scene
 
 MATERIAL_KIND = {k.name: k.kind for k in MATERIAL_KINDS}
@@ -101,34 +102,15 @@ class DeviceScene:
 
     def _scene_struct(self, sc: Scene) -> SceneDevice:
         s = SceneDevice()
-        pts = sc.positions.reshape(-1, 3).astype(np.float32)
-        self.mesh = wp.Mesh(points=self._arr(pts, wp.vec3),
-                            indices=self._arr(np.arange(len(pts), dtype=np.int32), wp.int32))
-        s.mesh = self.mesh.id
-        s.embree_scene = s.embree_intersect = s.embree_occluded = wp.uint64(0)
-        self.embree = None
-        if wp.get_device(self.device).is_cpu and self.tracer in ("auto", "embree"):
-            from ..embree import EmbreeScene, library
-
-            if library() is not None:
-                self.embree = EmbreeScene(sc.positions)
-                s.embree_scene = wp.uint64(self.embree.scene)
-                s.embree_intersect = wp.uint64(self.embree.intersect_fn)
-                s.embree_occluded = wp.uint64(self.embree.occluded_fn)
-            elif self.tracer == "embree":
-                raise RuntimeError("Embree was requested but is not available (pip install embreex)")
-        elif self.tracer == "embree":
-            raise RuntimeError("Embree traces on the CPU only")
+        self._slot = 0
+        self._slots = [{"arrays": [], "mesh": None, "embree": None}, {"arrays": [], "mesh": None, "embree": None}]
+        self.frame = 0
+        posed = posed_scene(sc, 0) if sc.animation is not None else sc
+        self._geometry(s, posed, self._slots[0])
         self.tracer_used = "embree" if self.embree is not None else "warp"
-        s.positions = self.mesh.points
-        s.normals = self._arr(sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
         s.uvs = self._arr(sc.uvs.reshape(-1, 2).astype(np.float32), wp.vec2)
-        s.has_tangents = int(sc.tangents is not None)
-        s.tangents = self._arr(sc.tangents.reshape(-1, 4) if sc.tangents is not None else np.zeros((1, 4), np.float32),
-                               wp.vec4)
         s.tri_smooth = self._arr(sc.tri_smooth.astype(np.int32), wp.int32)
         s.tri_material = self._arr(sc.tri_material.astype(np.int32), wp.int32)
-        s.tri_emission = self._arr(sc.tri_emission.astype(np.float32), wp.vec3)
         twosided = sc.tri_emit_twosided
         s.num_twosided_emitters = 0 if twosided is None else int(np.count_nonzero(twosided))
         s.tri_emit_twosided = self._arr(np.asarray(twosided if s.num_twosided_emitters else [0], np.int32), wp.int32)
@@ -145,29 +127,7 @@ class DeviceScene:
         s.material_mix_amount = self._arr(np.array([m.mix_amount for m in sc.materials], np.float32), float)
         s.num_mixtures = int(sum(m.mix is not None for m in sc.materials))
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
-
-        # one alias table over the emissive triangles, then the delta lights, by power
-        power = sc.light_power()
-        lights = np.nonzero(power > 0)[0].astype(np.int32)
-        delta_power = sc.delta_light_power()
-        deltas = np.nonzero(delta_power > 0)[0].astype(np.int32)
-        tri_pdf = np.zeros(sc.num_triangles, np.float32)
-        delta_pmf = np.zeros(max(len(sc.delta_lights), 1), np.float32)
-        entries = np.concatenate([lights, LIGHT_DELTA_BASE - deltas]).astype(np.int32)
-        if len(entries):
-            prob, alias, pmf = alias_table(np.concatenate([power[lights], delta_power[deltas]]))
-            tri_pdf[lights] = pmf[:len(lights)] / sc.triangle_areas()[lights]
-            delta_pmf[deltas] = pmf[len(lights):]
-        else:
-            prob, alias = np.ones(1, np.float32), np.zeros(1, np.int32)
-        s.light_tri = self._arr(entries if len(entries) else np.zeros(1, np.int32), wp.int32)
-        s.light_prob = self._arr(prob, float)
-        s.light_alias = self._arr(alias, wp.int32)
-        s.num_tri_lights = int(len(lights))
-        s.tri_light_pdf = self._arr(tri_pdf, float)
-        s.delta_lights = self._arr([delta_light_struct(d) for d in sc.delta_lights] or [DeltaLight()], DeltaLight)
-        s.delta_light_pmf = self._arr(delta_pmf, float)
-        s.num_delta_lights = int(len(deltas))
+        self._lights(s, posed, self._slots[0])
 
         s.env_kind = int({"none": ENV_NONE, "constant": ENV_CONSTANT, "envmap": ENV_MAP}[sc.env_kind])
         s.env_radiance = wp.vec3(*sc.env_radiance)
@@ -187,11 +147,123 @@ class DeviceScene:
             s.env_pixels = self._arr(np.zeros((1, 3), np.float32), wp.vec3)
             s.env_marginal_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
             s.env_conditional_cdf = self._arr(np.array([0.0, 1.0], np.float32), float)
-        has_env = sc.env_kind != "none"
-        s.env_select_prob = float(1.0 if has_env and not len(entries) else (0.5 if has_env else 0.0))
+        self._env_select(s, sc)
 
         s.textures, s.tex_pixels = self._textures(sc.textures)
         return s
+
+    def _slot_arr(self, slot: dict, data, dtype):
+        a = wp.array(data, dtype=dtype, device=self.device)
+        slot["arrays"].append(a)
+        return a
+
+    def _geometry(self, s: SceneDevice, sc: Scene, slot: dict) -> None:
+        """The frame's triangles into `slot` (its arrays replaced; its BVH refitted where it has
+        one of the same size, its Embree scene built again) and into s."""
+        slot["arrays"] = []
+        pts = sc.positions.reshape(-1, 3).astype(np.float32)
+        mesh = slot["mesh"]
+        if mesh is not None and mesh.points.shape[0] == len(pts):
+            mesh.points.assign(pts)
+            mesh.refit()
+        else:
+            mesh = slot["mesh"] = wp.Mesh(points=wp.array(pts, dtype=wp.vec3, device=self.device),
+                                          indices=wp.array(np.arange(len(pts), dtype=np.int32), dtype=wp.int32,
+                                                           device=self.device))
+        self.mesh = mesh
+        s.mesh = mesh.id
+        s.embree_scene = s.embree_intersect = s.embree_occluded = wp.uint64(0)
+        slot["embree"] = None
+        if wp.get_device(self.device).is_cpu and self.tracer in ("auto", "embree"):
+            from ..embree import EmbreeScene, library
+
+            if library() is not None:
+                slot["embree"] = EmbreeScene(sc.positions)
+                s.embree_scene = wp.uint64(slot["embree"].scene)
+                s.embree_intersect = wp.uint64(slot["embree"].intersect_fn)
+                s.embree_occluded = wp.uint64(slot["embree"].occluded_fn)
+            elif self.tracer == "embree":
+                raise RuntimeError("Embree was requested but is not available (pip install embreex)")
+        elif self.tracer == "embree":
+            raise RuntimeError("Embree traces on the CPU only")
+        self.embree = slot["embree"]
+        s.positions = mesh.points
+        s.normals = self._slot_arr(slot, sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
+        s.has_tangents = int(sc.tangents is not None)
+        s.tangents = self._slot_arr(slot, sc.tangents.reshape(-1, 4) if sc.tangents is not None
+                                    else np.zeros((1, 4), np.float32), wp.vec4)
+
+    def _lights(self, s: SceneDevice, sc: Scene, slot: dict) -> None:
+        """One alias table over the emissive triangles, then the delta lights, by power (the frame's
+        emission and geometry), into `slot` and s."""
+        s.tri_emission = self._slot_arr(slot, sc.tri_emission.astype(np.float32), wp.vec3)
+        power = sc.light_power()
+        lights = np.nonzero(power > 0)[0].astype(np.int32)
+        delta_power = sc.delta_light_power()
+        deltas = np.nonzero(delta_power > 0)[0].astype(np.int32)
+        tri_pdf = np.zeros(sc.num_triangles, np.float32)
+        delta_pmf = np.zeros(max(len(sc.delta_lights), 1), np.float32)
+        entries = np.concatenate([lights, LIGHT_DELTA_BASE - deltas]).astype(np.int32)
+        if len(entries):
+            prob, alias, pmf = alias_table(np.concatenate([power[lights], delta_power[deltas]]))
+            tri_pdf[lights] = pmf[:len(lights)] / sc.triangle_areas()[lights]
+            delta_pmf[deltas] = pmf[len(lights):]
+        else:
+            prob, alias = np.ones(1, np.float32), np.zeros(1, np.int32)
+        s.light_tri = self._slot_arr(slot, entries if len(entries) else np.zeros(1, np.int32), wp.int32)
+        s.light_prob = self._slot_arr(slot, prob, float)
+        s.light_alias = self._slot_arr(slot, alias, wp.int32)
+        s.num_tri_lights = int(len(lights))
+        s.tri_light_pdf = self._slot_arr(slot, tri_pdf, float)
+        s.delta_lights = self._slot_arr(slot, [delta_light_struct(d) for d in sc.delta_lights] or [DeltaLight()],
+                                        DeltaLight)
+        s.delta_light_pmf = self._slot_arr(slot, delta_pmf, float)
+        s.num_delta_lights = int(len(deltas))
+        self._has_lights = bool(len(entries))
+
+    def _env_select(self, s: SceneDevice, sc: Scene) -> None:
+        has_env = sc.env_kind != "none"
+        s.env_select_prob = float(1.0 if has_env and not self._has_lights else (0.5 if has_env else 0.0))
+
+    # ------------------------------------------------------------------ animation
+    def with_current_lights(self, prev: SceneDevice) -> SceneDevice:
+        """A fault injection (ReSTIR DI's mutation previous_lights_dropped): the previous frame's
+        scene `prev` with this frame's lights (the emitters' triangles where they are now, their
+        emission, the delta lights, the light tables), as a renderer that keeps the previous
+        geometry but not the previous lights would have it."""
+        s = SceneDevice()
+        for name in SceneDevice.vars:
+            setattr(s, name, getattr(prev, name))
+        for name in ("tri_emission", "light_tri", "light_prob", "light_alias", "num_tri_lights", "tri_light_pdf",
+                     "delta_lights", "delta_light_pmf", "num_delta_lights", "env_select_prob"):
+            setattr(s, name, getattr(self.scene, name))
+        emitters = np.repeat(np.any(self.host.tri_emission > 0, axis=1), 3)
+        pts = np.where(emitters[:, None], self.scene.positions.numpy(), prev.positions.numpy())
+        s.positions = wp.array(pts, dtype=wp.vec3, device=self.device)
+        self._mutant_positions = s.positions  # kept alive while the struct is in use
+        return s
+
+    @property
+    def animated(self) -> bool:
+        return self.host.animation is not None
+
+    def set_frame(self, frame: int) -> None:
+        """Make `scene` the scene at `frame` (an animated scene; a static one has one scene). The
+        struct of the frame before stays valid (its arrays live in the other of two slots) until
+        the frame after this one is set: an integrator keeps it as the previous sample's domain."""
+        if not self.animated or frame == self.frame:
+            return
+        posed = posed_scene(self.host, frame)
+        s = SceneDevice()
+        for name in SceneDevice.vars:
+            setattr(s, name, getattr(self.scene, name))
+        self._slot = 1 - self._slot
+        slot = self._slots[self._slot]
+        self._geometry(s, posed, slot)
+        self._lights(s, posed, slot)
+        self._env_select(s, self.host)
+        self.scene = s
+        self.frame = frame
 
     def _textures(self, descs) -> tuple:
         """The texture records and the packed texels (element 0 a black texel, so the array is
@@ -264,4 +336,8 @@ class DeviceScene:
         return c
 
     def memory_bytes(self) -> int:
-        return sum(a.capacity for a in self._arrays) + self.mesh.points.capacity
+        """Device bytes of the scene's arrays (both frames' geometry and lights of an animated scene)."""
+        slots = self._slots if self.animated else self._slots[:1]
+        return (sum(a.capacity for a in self._arrays)
+                + sum(a.capacity for sl in slots for a in sl["arrays"])
+                + sum(sl["mesh"].points.capacity + sl["mesh"].indices.capacity for sl in slots if sl["mesh"] is not None))

@@ -52,17 +52,26 @@ class ImageBatches:
             self.batch_excess_kurtosis = np.where(var > 0, m4 / var ** 2 - 3.0, 0.0)
 
 
+# The settings that make a method biased when changed from the value given here (explicit
+# switches, each documented as biased): the harness refuses them like a fault injection.
+BIASED_SWITCHES = {"temporal.previous_scene": True}
+
+
 class IndependentRuns(ImageBatches):
     """K runs of `config` (seeds seed0, seed0+1, ...), each run's statistic its average image
     (see ImageBatches), and `counters`: the renders' event counters summed over runs (non-finite
     values, zero-weight candidates, failed shifts).
 
     The harness tests the unbiased build only: a render whose `debug.mutation` setting is not
-    "none" (fault injection) is refused unless `allow_mutation` is set (the power checks).
+    "none" (fault injection), or with a biased switch on (BIASED_SWITCHES), is refused unless
+    `allow_mutation` is set (the power checks, and measuring the switch's bias).
     """
 
     def __init__(self, scene, config: RenderConfig, runs: int, seed0: int = 0, allow_mutation: bool = False,
-                 workers: int = 1, ray: str | None = None):
+                 workers: int = 1, ray: str | None = None, per_frame: bool = False):
+        """per_frame: each run's statistic is its frames side by side (an (H, T W) image) rather than
+        their average, so that every frame of an animated scene is tested against its own
+        reference (frame t of the reference's runs)."""
         if runs < 2:
             from ..config import ConfigError
 
@@ -71,9 +80,15 @@ class IndependentRuns(ImageBatches):
         if mutation != "none" and not allow_mutation:
             raise AssertionError(f"debug.mutation={mutation} is a biased fault injection; the harness tests "
                                  "the unbiased build only")
+        for key, unbiased in BIASED_SWITCHES.items():
+            value = config.settings.get(key, unbiased)
+            if str(value).lower() != str(unbiased).lower() and not allow_mutation:
+                raise AssertionError(f"{key}={value} is a biased switch; the harness tests the unbiased build only")
         self.stats = []
         self.counters: dict[str, int] = {}
         images = []
+        if per_frame:
+            config = dataclasses.replace(config, keep_frames=True)
         configs = [dataclasses.replace(config, seed=seed0 + k) for k in range(runs)]
         for k, r in enumerate(run_tasks([(scene, cfg) for cfg in configs], workers=workers, ray=ray)):
             self.stats.append(r.stats)
@@ -82,7 +97,7 @@ class IndependentRuns(ImageBatches):
                     raise AssertionError(f"{n} non-finite values ({name}) in run {k}: never acceptable "
                                          "(docs/validation.md#harness-rules)")
                 self.counters[name] = self.counters.get(name, 0) + n
-            images.append(r.image)
+            images.append(np.concatenate(list(r.frame_images), axis=1) if per_frame else r.image)
         super().__init__(images)
 
 

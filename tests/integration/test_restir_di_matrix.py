@@ -134,3 +134,43 @@ def test_restir_di_matrix_on_bump_maps_and_masks(name, config):
 @pytest.mark.parametrize("name", LIGHT_MATRIX_SCENES + MATERIAL_MATRIX_SCENES)
 def test_restir_di_matrix_on_delta_lights_and_a_lens(name, config):
     test_restir_di_matrix(name, config)
+
+
+# Scenes in motion (tests/scenes.py motion_scene: a sliding block, a moving light, a light switched
+# off and on, a block that vanishes and comes back, all four), each with a still and an orbiting
+# camera: temporal reuse alone (cap 20), the defaults, unshadowed targets. Each run's statistic is
+# its 8 frames side by side, each frame against the path tracer's runs of the same frame; ReSTIR
+# DI at 4 spp a frame (tests/integration/test_motion.py says why).
+MOTION_CELLS = ["C2-cap-20", "C4-defaults", "C4-unshadowed"]
+
+
+@functools.lru_cache(maxsize=None)
+def motion_reference(kind, motion):
+    return motion_runs(kind, "pt", 16, 500_000, motion)
+
+
+def motion_runs(kind, method, spp, seed0, motion, settings=None):
+    camera, speed, jitter = MATRIX_CAMERAS[motion]
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=2,
+                              camera_motion=camera, camera_speed=speed, jitter=jitter, settings=settings or {})
+    return IndependentRuns(_motion_scene(kind), cfg, RUNS, seed0, per_frame=True)
+
+
+@functools.lru_cache(maxsize=None)
+def _motion_scene(kind):
+    from tests.scenes import motion_scene
+
+    return motion_scene(kind)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", MOTION_CELLS)
+@pytest.mark.parametrize("motion", ["none", "orbit"])
+@pytest.mark.parametrize("kind", ["occluder", "light", "switch", "appear", "all"])
+def test_restir_di_matrix_in_motion(kind, motion, config):
+    settings, _ = MATRIX[config]
+    di = motion_runs(kind, "restir-di", 4, 10_000, motion, settings)
+    ref = motion_reference(kind, motion)
+    print(kind, motion, config, settings, f"K={RUNS} T={FRAMES} {SIZE}x{SIZE} per frame", "counters", di.counters)
+    rep = check(di, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    assert rep.mdb < 0.08

@@ -19,7 +19,7 @@ def reproject_kernel(cam: Camera, prev: Camera, depth: float, u: wp.vec2, out: w
     pixel = wp.tid()
     # a point seen through the pixel at the filter offset drawn from u
     ray = generate_ray(cam, pixel % cam.width, pixel // cam.width, u, wp.vec2(0.5))
-    out[pixel] = reproject(cam, prev, pixel, ray.o + ray.d * depth)
+    out[pixel] = reproject(cam, prev, pixel, ray.o + ray.d * depth, ray.o + ray.d * depth)
 
 
 def test_reprojection_under_a_still_camera_is_the_pixel_itself(device):

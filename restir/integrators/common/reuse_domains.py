@@ -6,6 +6,7 @@ only, never on reservoir contents, so the set of MIS techniques is fixed before 
 import warp as wp
 
 from ...device.camera import Camera, project_to_pixel
+from ...device.intersect import surface_at
 from ...device.sampling import square_to_uniform_disk_concentric
 from ...device.scene_device import SceneDevice
 from .gbuffer import GBuffer
@@ -18,17 +19,17 @@ NO_PIXEL = wp.constant(-1)
 REFERENCE_LINES = 1080.0
 
 @wp.func
-def reproject(camera: Camera, prev_camera: Camera, pixel: int, p: wp.vec3) -> int:
-    """The previous frame's pixel of `pixel`, whose primary hit this frame is p (a static scene):
-    the pixel moved by p's motion on screen (its position under the previous camera less its
-    position under this one); NO_PIXEL when p was behind that camera or the moved pixel is off
-    screen. Not the pixel whose square holds p under the previous camera: the primary ray's
+def reproject(camera: Camera, prev_camera: Camera, pixel: int, p: wp.vec3, p_prev: wp.vec3) -> int:
+    """The previous frame's pixel of `pixel`, whose primary hit this frame is p and was p_prev
+    the frame before (the same point of its surface before that surface moved): the pixel moved by
+    the point's motion on screen (p_prev under the previous camera less p under this one);
+    NO_PIXEL when p_prev was behind that camera or the moved pixel is off screen. Not the pixel whose square holds p under the previous camera: the primary ray's
     filter offset reaches into the neighbouring pixels (a tent or Gaussian filter), so a pixel's
     history would come from a neighbour in a third of the frames even under a still camera, and
     the samples would wander between pixels, frame after frame: an error correlated between
     neighbours that the denoiser keeps (docs/guide/when_restir_pays.md#what-the-denoiser-keeps-correlated-error)."""
     cur = project_to_pixel(camera, p)
-    prev = project_to_pixel(prev_camera, p)
+    prev = project_to_pixel(prev_camera, p_prev)
     if prev[0] == -1.0 and prev[1] == -1.0:  # project_to_pixel's answer for a point behind the camera
         return NO_PIXEL
     x = float(pixel % camera.width) + 0.5 + (prev[0] - cur[0])
@@ -100,14 +101,18 @@ class Neighbor:
 
 
 @wp.func(inline=True)  # as load_shading: out of line it copies SceneDevice and a Shading
-def temporal_neighbor(scene: SceneDevice, camera: Camera, prev_camera: Camera, prev_gb: GBuffer, sc: Shading,
-                      pixel: int) -> Neighbor:
+def temporal_neighbor(prev_scene: SceneDevice, motion_scene: SceneDevice, camera: Camera, prev_camera: Camera,
+                      prev_gb: GBuffer, sc: Shading, pixel: int) -> Neighbor:
     """The temporal technique of `pixel`, with primary hit sc: its previous frame's pixel
-    (`reproject`), if that had a primary hit and the two surfaces are similar."""
+    (`reproject`), if that had a primary hit and the two surfaces are similar. The motion vector
+    is the hit's own: its point (triangle and barycentrics) where `motion_scene` had it (the
+    previous frame's scene; with a moving object, the camera's motion alone would point to where
+    the object was not). The previous hit is rebuilt in `prev_scene`, the domain it belongs to."""
     n = Neighbor()
-    n.pixel = reproject(camera, prev_camera, pixel, sc.hit.p)
+    p_prev = surface_at(motion_scene, sc.hit.tri, sc.hit.bary[0], sc.hit.bary[1], 0.0).p
+    n.pixel = reproject(camera, prev_camera, pixel, sc.hit.p, p_prev)
     if n.pixel != NO_PIXEL:
-        n.sh = load_shading(scene, prev_gb, n.pixel)
+        n.sh = load_shading(prev_scene, prev_gb, n.pixel)
         if n.sh.valid == 0 or not similar_surfaces(sc, n.sh):
             n.pixel = NO_PIXEL
     return n

@@ -27,9 +27,15 @@ from .s5_shade import shade_kernel
 # built for the fused pipeline, the one that ships; stages.split refuses them (check_settings).
 MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
     "drop_empty_neighbors": lambda: (initial_temporal_kernel, make_spatial_kernel(drop_empty_neighbors=True)),  # A3
-    "skip_zero_canonical": lambda: (make_initial_temporal_kernel(skip_zero_canonical=True),                    # A1
+    "skip_zero_canonical": lambda: (make_initial_temporal_kernel("skip_zero_canonical"),                    # A1
                                     make_spatial_kernel(skip_zero_canonical=True)),
-    "temporal_overweight": lambda: (make_initial_temporal_kernel(overweight_history=True), spatial_kernel),  # feedback
+    "temporal_overweight": lambda: (make_initial_temporal_kernel("overweight_history"), spatial_kernel),  # feedback
+    # under scene motion: the history's domain evaluated in the current scene; the motion vector
+    # from the camera alone; the previous frame's lights replaced by the current ones (a host-side
+    # choice of the previous scene: DeviceScene.with_current_lights)
+    "current_scene_history": lambda: (make_initial_temporal_kernel("current_scene_history"), spatial_kernel),
+    "camera_motion_vectors": lambda: (make_initial_temporal_kernel("camera_motion_vectors"), spatial_kernel),
+    "previous_lights_dropped": None,
     "spatial_in_place": None,        # the spatial pass writes its own input (race, R2)
     "bsdf_unshadowed_reuse": None,   # lets check_settings accept a biased combination
     # a thin lens's primary rays rebuilt from the lens's centre (common/gbuffer.py)
@@ -59,6 +65,10 @@ class DISettings(Settings):
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs")
     temporal_cap: float = setting("temporal.cap", 2.0, "history confidence capped to this x the current one "
                                   "(<= 0: no cap, i.e. 1e6 x)")
+    temporal_previous_scene: bool = setting("temporal.previous_scene", True, "an animated scene: the history's "
+                                            "targets and motion vectors in the previous frame's scene (false: in "
+                                            "the current one, cheaper and biased where things moved; the "
+                                            "validation harness refuses it)")
     spatial: SpatialReuseSettings = spatial_reuse("spatial.", radius_at_1080=5.0, rounds=1)
     stages_split: bool = setting("stages.split", False, "initial RIS, visibility and temporal reuse as three "
                                  "kernels, each timed (they run fused otherwise; the same images bit for bit), "
@@ -125,6 +135,7 @@ class ReSTIRDI(Integrator):
         # passes write into the history's buffer (Integrator.reuse_pass)
         self.pass_out = self.buffer("reservoirs_pass", DIReservoir) if self.settings.stages_split else None
         self.prev_camera = None
+        self.prev_scene = None  # the scene of the previous sample (the history's domain)
         self.current_camera = self.dscene.camera  # the camera of the sample being rendered
         self.sample_L = self.buffer("sample_L", wp.vec3)
 
@@ -149,9 +160,21 @@ class ReSTIRDI(Integrator):
         trace_primary_hits(self, camera, p.seed, p.frame, sample, p.hide_emitters, self.gbuffers.current,
                            self.primary_weight, self.emission)
 
+    def history_scene(self):
+        """The scene the history's domain is evaluated in: the previous sample's (the same as this
+        one's unless the scene moved between them), or with temporal.previous_scene off, this one;
+        the mutation previous_lights_dropped: the previous one with this one's lights."""
+        sc = self.dscene.scene
+        if self.prev_scene is None or not self.settings.temporal_previous_scene:
+            return sc
+        if self.settings.debug_mutation == "previous_lights_dropped":
+            return self.dscene.with_current_lights(self.prev_scene)
+        return self.prev_scene
+
     def resample_and_shade(self, frame: int, sample: int) -> None:
         """Every stage after the primary hits, for one sample: direct light into `sample_L`."""
         sc = self.dscene.scene
+        prev_sc = self.history_scene()
         initial_temporal, spatial = MUTATIONS.kernels(self.settings.debug_mutation)
         in_place = self.settings.debug_mutation == "spatial_in_place"
         gb, res = self.gbuffers, self.reservoirs
@@ -163,10 +186,10 @@ class ReSTIRDI(Integrator):
                 self.reuse_pass("visibility", visibility_kernel, [sc, p, gb.current])
             if temporal:
                 self.reuse_pass("temporal", temporal_kernel,
-                                [sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
+                                [sc, prev_sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
                                  res.previous])
         else:
-            self.run_stage("initial_temporal", initial_temporal, [sc, p, int(temporal), self.current_camera,
+            self.run_stage("initial_temporal", initial_temporal, [sc, prev_sc, p, int(temporal), self.current_camera,
                                                                   self.prev_camera or self.dscene.camera, gb.current,
                                                                   gb.previous, res.previous], [res.current])
         for rd in range(self.settings.spatial.rounds):
@@ -180,6 +203,7 @@ class ReSTIRDI(Integrator):
         layer swaps the G-buffers)."""
         self.reservoirs.swap()
         self.prev_camera = camera
+        self.prev_scene = self.dscene.scene
 
     def render_sample(self, frame: int, sample: int, camera):
         self.current_camera = camera

@@ -179,6 +179,22 @@ def own_target(scene: SceneDevice, sh: Shading, r: DIReservoir, visibility: int)
 
 
 @wp.func
+def light_jacobian(dst: SceneDevice, src: SceneDevice, r: DIReservoir) -> float:
+    """|J| of moving r's sample from the scene `src` to the scene `dst` (a frame before and after
+    the scene moved): a triangle sample keeps its barycentrics, so its area measure changes by its
+    triangle's area ratio (1 under rigid motion, exactly 1 when nothing moved); a direction or a
+    delta light keeps its measure (1)."""
+    if r.light_tri < 0:
+        return 1.0
+    i = 3 * r.light_tri
+    a_dst = wp.length(wp.cross(dst.positions[i + 1] - dst.positions[i], dst.positions[i + 2] - dst.positions[i]))
+    a_src = wp.length(wp.cross(src.positions[i + 1] - src.positions[i], src.positions[i + 2] - src.positions[i]))
+    if a_src <= 0.0:
+        return 0.0
+    return a_dst / a_src
+
+
+@wp.func
 def candidate_densities(scene: SceneDevice, sh: Shading, r: DIReservoir, with_bsdf: int) -> wp.vec2:
     """(p_L(y), p_B(y)): the densities with which light sampling and BSDF sampling at sh produce
     r's sample y, both in y's measure (area on a triangle, solid angle toward the environment,

@@ -122,6 +122,7 @@ class PTSettings(PathReuseSettings):
 
 class ReSTIRPT(PathReuseIntegrator):
     name = "restir-pt"
+    STATIC_SCENE_TEMPORAL = ("temporal",)
     STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
               "trace_temporal", "trace_initial", "temporal", "mcmc", "spatial", "shade")
     KERNELS = (primary_hits_kernel, trace_temporal_kernel, mcmc_kernel, spatial_kernel, reciprocal_spatial_kernel,

@@ -60,7 +60,7 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
         own = sample_output(c)
         if sc.valid == 0:
             return c, none, none, own
-        nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
+        nq = temporal_neighbor(scene, scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
             return c, none, none, own
         q = nq.pixel

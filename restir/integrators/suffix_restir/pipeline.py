@@ -128,6 +128,7 @@ MMIS_BASELINE = {"shift": "reconnection", "prefix.temporal": False, "suffix.temp
 
 class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
+    STATIC_SCENE_TEMPORAL = ("prefix.temporal", "suffix.temporal")
     STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
               "prefix", "search", "suffix", "suffix_spatial", "gather")
     KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel,

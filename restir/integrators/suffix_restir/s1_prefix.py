@@ -92,7 +92,7 @@ def prefix_kernel(offset: int, scene: SceneDevice, params: SRParams, temporal: i
     events[pixel] = packed_events(wp.vec4i(0, 0, 0, fresh.rays))
     if temporal == 0 or sc.valid == 0:
         return
-    nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, sc, pixel)
+    nq = temporal_neighbor(scene, scene, camera, prev_camera, prev_gb, sc, pixel)
     if nq.pixel == NO_PIXEL:
         return
     q = nq.pixel

@@ -108,7 +108,7 @@ def make_suffix_kernel(mutation: str = "none"):
         if temporal == 0 or dc.sh.valid == 0:
             return
         # ---- temporal reuse of the previous frame's final suffix of the pixel that saw this hit
-        nq = temporal_neighbor(scene, camera, prev_camera, prev_gb, load_shading(scene, gb, pixel), pixel)
+        nq = temporal_neighbor(scene, scene, camera, prev_camera, prev_gb, load_shading(scene, gb, pixel), pixel)
         if nq.pixel == NO_PIXEL:
             return
         q = nq.pixel
