@@ -52,7 +52,8 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
     - `builtin:NAME`: keyword arguments go to the builtin (`width=`, `height=`, `spp=`, ...;
       `restir render --help` lists the builtins).
     - a pbrt-v4 file (`.pbrt`; docs/guide/pbrt.md says what is read, refused and approximated).
-    - a glTF 2.0 file (`.gltf`, `.glb`; docs/guide/gltf.md); `camera="NAME"` picks a camera node.
+    - a glTF 2.0 file (`.gltf`, `.glb`; docs/guide/gltf.md); `camera="NAME"` picks a camera node,
+      `fps=` the frames per second its animations play at (30 by default).
     - a dict: a scene in `mi.load_dict`'s form ({"type": "scene", "sensor": {...}, ...}).
 
     `missing_textures="grey"` renders a bitmap whose file is missing as constant grey (0.5), with
@@ -82,12 +83,17 @@ def load_scene(spec, defines: dict | None = None, *, missing_textures: str = "er
         return build_scene(builtin_scene(name, **params), name, missing_textures, progress)
     if spec.lower().endswith((".gltf", ".glb")):
         options = {**(defines or {}), **params}
-        unknown = sorted(set(options) - {"camera"})
+        unknown = sorted(set(options) - {"camera", "fps"})
         if unknown:
-            raise SceneError(f"unknown parameter(s) {', '.join(unknown)} for a glTF file (it takes camera=NAME)", spec)
-        from .scene.gltf.reader import load_gltf
+            raise SceneError(f"unknown parameter(s) {', '.join(unknown)} for a glTF file (it takes camera=NAME and "
+                             "fps=FRAMES_PER_SECOND)", spec)
+        from .scene.gltf.reader import DEFAULT_FPS, load_gltf
 
-        return build_scene(load_gltf(spec, options.get("camera")), spec, missing_textures, progress)
+        try:
+            fps = float(options.get("fps", DEFAULT_FPS))
+        except (TypeError, ValueError):
+            raise SceneError(f"fps must be a number, not {options.get('fps')!r}", spec) from None
+        return build_scene(load_gltf(spec, options.get("camera"), fps), spec, missing_textures, progress)
     if spec.lower().endswith(".pbrt"):
         if defines or params:
             raise SceneError("parameters (-D, keywords) apply to Mitsuba XML files and builtins, not to pbrt-v4 files",

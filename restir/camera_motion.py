@@ -2,8 +2,8 @@
 
 `orbit`: the camera turns about the vertical axis (its own up vector) through the centre of the
 scene's bounding box, `speed` degrees per frame. `dolly`: it moves along its view direction by
-`speed` times the bounding-box diagonal per frame. `none`: a static camera. The scene itself is
-static: temporal reuse in this renderer assumes it (see docs/guide/restir_di.md).
+`speed` times the bounding-box diagonal per frame. `none`: a static camera. The scene may move as
+well (scene/animation.py); the pivot and the diagonal are the rest pose's.
 """
 import numpy as np
 

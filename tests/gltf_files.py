@@ -8,11 +8,15 @@ import numpy as np
 import pygltflib as g
 
 
-def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_required=(), images=()):
+def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_required=(), images=(), animations=()):
     """meshes: [(vertices (N, 3), faces (M, 3), material index or None, extras)] where extras may
-    hold "normals", "uvs" (N, 2), "tangents" (N, 4), "matrix" (4x4, node transform); materials: [dict of glTF JSON];
+    hold "normals", "uvs" (N, 2), "tangents" (N, 4), "matrix" (4x4, node transform), "trs"
+    ((translation, rotation xyzw, scale): node transform), "parent" (another mesh's index: this
+    node becomes its child), "name"; materials: [dict of glTF JSON];
     camera: (world matrix of the camera node (looks down -Z), yfov radians, aspect, name);
-    lights: [(light JSON, world matrix of its node)]; images: [PNG bytes]."""
+    lights: [(light JSON, world matrix of its node or its (translation, rotation, scale))]; images: [PNG bytes];
+    animations: [(node, path, times, values, interpolation)], one channel each, all in one animation
+    (nodes: the meshes' first, then the camera's, then the lights')."""
     blob = bytearray()
     views, accessors = [], []
 
@@ -39,23 +43,34 @@ def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_requi
             attrs.TANGENT = add(extras["tangents"], g.VEC4, g.ARRAY_BUFFER)
         idx = add(np.asarray(faces).reshape(-1), g.SCALAR, g.ELEMENT_ARRAY_BUFFER, g.UNSIGNED_INT)
         gl_meshes.append(g.Mesh(primitives=[g.Primitive(attributes=attrs, indices=idx, material=mat)]))
-        node = g.Node(mesh=len(gl_meshes) - 1)
+        node = g.Node(mesh=len(gl_meshes) - 1, name=extras.get("name"))
         if "matrix" in extras:
             node.matrix = np.asarray(extras["matrix"], float).T.reshape(-1).tolist()
+        if "trs" in extras:
+            node.translation, node.rotation, node.scale = (list(map(float, v)) for v in extras["trs"])
         nodes.append(node)
     cameras = []
     if camera is not None:
         m, yfov, aspect, name = camera
         cameras.append(g.Camera(type="perspective", perspective=g.Perspective(yfov=yfov, aspectRatio=aspect, znear=0.01)))
-        nodes.append(g.Node(name=name, camera=0, matrix=np.asarray(m, float).T.reshape(-1).tolist()))
+        node = g.Node(name=name, camera=0)
+        if isinstance(m, tuple):  # (translation, rotation, scale)
+            node.translation, node.rotation, node.scale = (list(map(float, v)) for v in m)
+        else:
+            node.matrix = np.asarray(m, float).T.reshape(-1).tolist()
+        nodes.append(node)
     used = list(extensions_required)
     extensions = {}
     if lights:
         extensions["KHR_lights_punctual"] = {"lights": [lt for lt, _ in lights]}
         used.append("KHR_lights_punctual")
         for i, (_, m) in enumerate(lights):
-            nodes.append(g.Node(matrix=np.asarray(m, float).T.reshape(-1).tolist(),
-                                extensions={"KHR_lights_punctual": {"light": i}}))
+            node = g.Node(extensions={"KHR_lights_punctual": {"light": i}})
+            if isinstance(m, tuple):  # (translation, rotation, scale)
+                node.translation, node.rotation, node.scale = (list(map(float, v)) for v in m)
+            else:
+                node.matrix = np.asarray(m, float).T.reshape(-1).tolist()
+            nodes.append(node)
     gl_images, textures = [], []
     for png in images:
         while len(blob) % 4:
@@ -65,7 +80,24 @@ def write_gltf(path, meshes, materials, camera=None, lights=(), extensions_requi
         gl_images.append(g.Image(bufferView=len(views) - 1, mimeType="image/png"))
         textures.append(g.Texture(source=len(gl_images) - 1, sampler=0))
     mats = [g.Material(**_material(m)) for m in materials]
-    doc = g.GLTF2(scene=0, scenes=[g.Scene(nodes=list(range(len(nodes))))], nodes=nodes, meshes=gl_meshes,
+    children = set()
+    for i, (_, _, _, extras) in enumerate(meshes):
+        if "parent" in extras:
+            nodes[extras["parent"]].children = [*(nodes[extras["parent"]].children or []), i]
+            children.add(i)
+    gl_animations = []
+    if animations:
+        samplers, channels = [], []
+        for node, prop, times, values, interp in animations:
+            t = add(np.asarray(times, float).reshape(-1), g.SCALAR)
+            v = np.asarray(values, float)
+            v = add(v.reshape(-1, v.shape[-1]), {3: g.VEC3, 4: g.VEC4}[v.shape[-1]])
+            samplers.append(g.AnimationSampler(input=t, output=v, interpolation=interp))
+            channels.append(g.AnimationChannel(sampler=len(samplers) - 1, target=g.AnimationChannelTarget(node=node,
+                                                                                                         path=prop)))
+        gl_animations.append(g.Animation(samplers=samplers, channels=channels))
+    roots = [i for i in range(len(nodes)) if i not in children]
+    doc = g.GLTF2(scene=0, scenes=[g.Scene(nodes=roots)], nodes=nodes, meshes=gl_meshes, animations=gl_animations,
                   accessors=accessors, bufferViews=views, buffers=[g.Buffer(byteLength=len(blob))], materials=mats,
                   cameras=cameras, extensions=extensions, extensionsUsed=sorted(set(used)),
                   extensionsRequired=list(extensions_required), images=gl_images, textures=textures,

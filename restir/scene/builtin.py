@@ -294,13 +294,13 @@ def indirect_room(width=256, height=256, spp=16, max_depth=-1, radiance_scale=4.
 ANIMATED_FRAMES = 64  # the animated Cornell box's period
 
 
-def cornell_box_animated(**kw) -> dict:
+def cornell_box_animated(width=512, height=512, spp=16, max_depth=-1) -> dict:
     """The Cornell box in motion over 64 frames (then it holds its last pose): the short block
     slides across the floor toward the red wall and back; the light swings along x, and is
     switched off for frames 24 to 31 (docs/guide/animation.md)."""
     from .animation import Animation, Motion
 
-    scene = cornell_box(**kw)
+    scene = cornell_box(width=width, height=height, spp=spp, max_depth=max_depth)
     n = ANIMATED_FRAMES
     scene["_animation"] = Animation({
         "short": Motion(translation=([0, n // 2, n], [[0, 0, 0], [0.22, 0, -0.06], [0, 0, 0]])),

@@ -282,3 +282,73 @@ def test_refusals_and_warnings(tmp_path):
                                      camera=(np.eye(4), 1.0, 1.0, "cam")), camera="x")
     with pytest.raises(SceneError, match="unknown parameter"):
         restir.load_scene(path, spp=4)
+
+
+# ------------------------------------------------------------------ animations
+def _box(size=0.2):
+    """A small cube's 8 vertices and 12 triangles about the origin."""
+    v = np.array([[x, y, z] for x in (-size, size) for y in (-size, size) for z in (-size, size)], float)
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    return v, f
+
+
+def _z_rotation(deg):
+    h = math.radians(deg) / 2
+    return [0.0, 0.0, math.sin(h), math.cos(h)]
+
+
+def test_node_animations_move_meshes_their_children_and_lights(tmp_path):
+    """Channels of one animation at fps 4 (1 s = 4 frames): the parent box translates (linear), its
+    child turns with it; another box steps; a third follows a cubic spline whose tangents are per
+    second; a point light's node translates."""
+    from restir.scene.animation import posed_scene
+
+    v, f = _box()
+    ident = ([0, 0, 0], [0, 0, 0, 1], [1, 1, 1])
+    meshes = [(v, f, 0, {"trs": ident, "name": "parent"}),
+              (v, f, 0, {"trs": ([1.0, 0, 0], [0, 0, 0, 1], [1, 1, 1]), "parent": 0, "name": "child"}),
+              (v, f, 0, {"trs": ([0, 2.0, 0], [0, 0, 0, 1], [1, 1, 1])}),
+              (v, f, 0, {"trs": ([0, -2.0, 0], [0, 0, 0, 1], [1, 1, 1])})]
+    light = ({"type": "point", "color": [1, 1, 1], "intensity": 2.0}, ([0, 0, 3.0], [0, 0, 0, 1], [1, 1, 1]))
+    cubic = np.array([[[0, 0, 0], [0, 0, 0], [4.0, 0, 0]],      # in, value, out (per second)
+                      [[0, 0, 0], [1.0, 0, 0], [0, 0, 0]]])
+    anims = [(0, "translation", [0, 1], [[0, 0, 0], [0, 0, 1.0]], "LINEAR"),
+             (0, "rotation", [0, 1], [[0, 0, 0, 1], _z_rotation(90)], "LINEAR"),
+             (2, "translation", [0, 0.5], [[0, 2.0, 0], [0, 2.0, 5.0]], "STEP"),
+             (3, "translation", [0, 1], cubic + np.array([0, -2.0, 0]) * np.array([[[0], [1], [0]]]), "CUBICSPLINE"),
+             (5, "translation", [0, 1], [[0, 0, 3.0], [0.5, 0, 3.0]], "LINEAR")]  # node 5: the light (4 is the camera)
+    path = write_gltf(tmp_path / "a.gltf", meshes, [mr([0.5, 0.5, 0.5])], lights=[light],
+                      camera=(top_down_camera(8.0), math.radians(40), 1.0, "cam"), animations=anims)
+    scene = restir.load_scene(path, fps=4)
+    assert scene.animation is not None and scene.animation.frames == 5
+    rest = scene.positions
+    p = posed_scene(scene, 2).positions  # t = 0.5 s
+    centre = lambda pos, name: pos[slice(*scene.objects[name])].reshape(-1, 3).mean(0)  # noqa: E731
+    np.testing.assert_allclose(centre(p, "shape_0"), [0, 0, 0.5], atol=1e-5)
+    # the child at (1, 0, 0) under the parent turned 45 degrees about z and lifted 0.5
+    np.testing.assert_allclose(centre(p, "shape_1"), [math.cos(math.pi / 4), math.sin(math.pi / 4), 0.5], atol=1e-5)
+    np.testing.assert_allclose(centre(posed_scene(scene, 1).positions, "shape_2"), centre(rest, "shape_2"), atol=1e-6)
+    np.testing.assert_allclose(centre(p, "shape_2"), [0, 2.0, 5.0], atol=1e-5)
+    # Hermite at s = 1/2 over 1 s: v0/2 + b0/8 + v1/2 - a1/8, b0 = 4 per second
+    np.testing.assert_allclose(centre(p, "shape_3"), [0.5 * 0 + 4.0 / 8 + 0.5 * 1.0, -2.0, 0], atol=1e-5)
+    np.testing.assert_allclose(posed_scene(scene, 2).delta_lights[0].position, [0.25, 0, 3.0], atol=1e-6)
+    r = restir.render(scene, method="restir-di", spp=1, frames=5, width=16, height=16, keep_frames=True)
+    assert r.frame_images.shape == (5, 16, 16, 3) and np.all(np.isfinite(r.frame_images))
+
+
+def test_animation_refusals_and_warnings(tmp_path):
+    v, f = _box()
+    m = np.eye(4)
+    path = write_gltf(tmp_path / "m.gltf", [(v, f, 0, {"matrix": m})], [mr([0.5, 0.5, 0.5])],
+                      animations=[(0, "translation", [0, 1], [[0, 0, 0], [1, 0, 0]], "LINEAR")])
+    with pytest.raises(SceneError, match="has a matrix"):
+        restir.load_scene(path)
+    path = write_gltf(tmp_path / "c.gltf", [(v, f, 0, {"trs": ([0, 0, 0], [0, 0, 0, 1], [1, 1, 1])})],
+                      [mr([0.5, 0.5, 0.5])], camera=(([0, 0, 3.0], [0, 0, 0, 1], [1, 1, 1]), math.radians(40), 1.0, "cam"),
+                      animations=[(1, "translation", [0, 1], [[0, 0, 3.0], [1, 0, 3.0]], "LINEAR")])
+    with pytest.warns(SceneWarning, match="camera's animation is not played"):
+        scene = restir.load_scene(path)
+    assert scene.animation is None  # only the camera moved: nothing that renders
+    with pytest.raises(SceneError, match="fps"):
+        restir.load_scene(path, fps="fast")

@@ -4,7 +4,7 @@ this pixel's primary hit was seen, by generalized balance (Talbot) MIS over the 
 any weight is computed (cap_history). Both samples are shifted: the current one into the
 previous domain (its density there, for its own weight) and the history's into this one.
 The previous domain is the previous primary hit seen by the previous camera, evaluated with the
-current scene (static scenes). The replay is done inline in this pass (no separate retrace
+current scene: a static scene (api.method_settings refuses temporal reuse on an animated one). The replay is done inline in this pass (no separate retrace
 pass): the same function runs for both directions with the same seeds, so the two passes of
 the official code cannot disagree here by construction.
 

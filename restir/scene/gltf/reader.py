@@ -17,6 +17,7 @@ from ..scene_file import check_scene_file
 from ..shapes import TriMesh
 from ..transforms import frame_along
 from .accessors import Buffers
+from .animation import DEFAULT_FPS, read_animations
 from .materials import Materials
 
 KNOWN_EXTENSIONS = ("KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform",
@@ -25,7 +26,7 @@ DEFAULT_HEIGHT = 720
 DEFAULT_YFOV = math.radians(45.0)
 
 
-def load_gltf(path: str, camera: str | None = None) -> dict:
+def load_gltf(path: str, camera: str | None = None, fps: float = DEFAULT_FPS) -> dict:
     try:
         import pygltflib
     except ImportError:
@@ -37,7 +38,7 @@ def load_gltf(path: str, camera: str | None = None) -> dict:
         raise SceneError(f"not a readable glTF file ({type(e).__name__}: {e})", path) from None
     if gltf is None:
         raise SceneError("not a readable glTF file", path)
-    return _Reader(gltf, path, camera).read()
+    return _Reader(gltf, path, camera, fps).read()
 
 
 def _trs(node) -> np.ndarray:
@@ -63,13 +64,16 @@ def _trs(node) -> np.ndarray:
 
 
 class _Reader:
-    def __init__(self, gltf, path: str, camera: str | None):
-        self.gltf, self.path, self.camera_name = gltf, path, camera
+    def __init__(self, gltf, path: str, camera: str | None, fps: float = DEFAULT_FPS):
+        self.gltf, self.path, self.camera_name, self.fps = gltf, path, camera, fps
+        self.parents: dict[int, int] = {}  # node -> its parent (-1: a root)
+        self.node_of: dict[str, int] = {}  # object name (the tree's key) -> the node that carries it
         self.buffers = Buffers(gltf, path)
         self.materials = Materials(gltf, self.buffers, path)
         self.shapes: list[dict] = []
         self.emitters: list[dict] = []
-        self.cameras: list[tuple] = []   # (name, camera index, world matrix)
+        self.cameras: list[tuple] = []   # (name, camera index, world matrix, node)
+        self.camera_node = None          # the node of the camera the scene is seen through
         self.positions: list[tuple] = []  # (POSITION accessor, node matrix, name): the default view's bounds
 
     def read(self) -> dict:
@@ -80,8 +84,6 @@ class _Reader:
         for ext in g.extensionsUsed or []:
             if ext not in KNOWN_EXTENSIONS:
                 warn(f"the extension '{ext}' is not read (the file does not require it)", self.path)
-        if g.animations:
-            warn(f"{len(g.animations)} animation(s) are not played: the scene renders as its nodes stand", self.path)
         scenes = g.scenes or []
         if not scenes:
             raise SceneError("the file has no scene", self.path)
@@ -90,6 +92,7 @@ class _Reader:
             raise SceneError(f"the default scene {g.scene} does not exist", self.path)
         seen: set[int] = set()
         for n in scene.nodes or []:
+            self.parents[n] = -1
             self.node(n, np.eye(4), seen, 0)
         if not self.shapes:
             raise SceneError("the scene has no triangles", self.path)
@@ -98,6 +101,9 @@ class _Reader:
             tree[f"shape_{i}"] = s
         for i, e in enumerate(self.emitters):
             tree[f"emitter_{i}"] = e
+        parents = [self.parents.get(n, -1) for n in range(len(g.nodes or []))]
+        tree["_animation"] = read_animations(g, self.buffers, parents, self.node_of, self.fps, self.path,
+                                             self.camera_node)
         return tree
 
     # ------------------------------------------------------------------ graph
@@ -115,13 +121,17 @@ class _Reader:
         if node.mesh is not None:
             if node.skin is not None:
                 warn(f"node {i}: its skin is not applied (the mesh renders in its bind pose)", self.path)
+            first = len(self.shapes)
             self.mesh(node.mesh, m if node.skin is None else np.eye(4))
+            self.node_of.update({f"shape_{k}": i for k in range(first, len(self.shapes))})
         if node.camera is not None:
-            self.cameras.append((node.name, node.camera, m))
+            self.cameras.append((node.name, node.camera, m, i))
         light = (node.extensions or {}).get("KHR_lights_punctual")
         if light is not None:
             self.light(light.get("light"), m, i)
+            self.node_of[f"emitter_{len(self.emitters) - 1}"] = i
         for c in node.children or []:
+            self.parents[c] = i
             self.node(c, m, seen, depth + 1)
 
     # ------------------------------------------------------------------ meshes
@@ -261,7 +271,7 @@ class _Reader:
             chosen = self.cameras[0]
         if chosen is None:
             return self.default_sensor()
-        name, ci, m = chosen
+        name, ci, m, self.camera_node = chosen
         if not 0 <= ci < len(cams):
             raise SceneError(f"camera {ci} does not exist", self.path)
         cam = cams[ci]
@@ -318,3 +328,4 @@ def _mean_over_triangles(tex, uvs: np.ndarray) -> np.ndarray:
     x = np.minimum((u * w).astype(int), w - 1)
     y = np.minimum((v * h).astype(int), h - 1)
     return img[y, x].mean(axis=1)
+
