@@ -88,8 +88,9 @@ def fraction(text: str) -> float:
 
 def builtins_epilog() -> str:
     lines = ["builtin scenes (SCENE = builtin:NAME):"]
+    width = max(map(len, BUILTIN_DESCRIPTIONS)) + 2
     for name, text in BUILTIN_DESCRIPTIONS.items():
-        lines += textwrap.wrap(text, 96, initial_indent=f"  {name:<20}", subsequent_indent=" " * 22)
+        lines += textwrap.wrap(text, 96, initial_indent=f"  {name:<{width}}", subsequent_indent=" " * (width + 2))
     return "\n".join(lines)
 
 

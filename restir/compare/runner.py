@@ -254,6 +254,9 @@ def compare(scene, methods, config: CompareConfig | None = None, *, progress=Non
     if len({s.label for s in specs}) != len(specs):
         raise ConfigError("the same --method is given twice")
     c.validate()
+    from ..scene.animation import refuse_for_one_reference
+
+    refuse_for_one_reference(scene, "compare")
     method_workers = c.workers or (1 if c.equal_time is not None else min(default_workers(), len(specs)))
     fan_out = c.equal_time is None and (c.ray is not None or method_workers > 1)
     from ..integrators import METHODS

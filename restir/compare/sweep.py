@@ -77,6 +77,9 @@ def sweep(scene, method: str, grid, *, seeds: int = 1, frames: int = 16, spp: in
     from ..api import check_device, sized_scene
     from ..fanout import run_tasks
 
+    from ..scene.animation import refuse_for_one_reference
+
+    refuse_for_one_reference(scene, "sweep")
     points = grid if grid and isinstance(grid[0], dict) else parse_grid(grid or [], method)
     if seeds < 1 or frames < 1 or spp < 1:
         raise ConfigError("seeds, frames and spp must be >= 1")

@@ -257,6 +257,30 @@ def posed_scene(scene, frame: int):
     return out
 
 
+def refuse_for_one_reference(scene, what: str) -> None:
+    """A measurement against one reference image (compare, sweep) cannot judge an animated scene,
+    whose every frame has its own expectation: refused rather than measured against the wrong image."""
+    if scene.animation is not None:
+        raise SceneError(f"the scene is animated, and {what} measures every frame against one reference image; a "
+                         "moving scene needs a reference per frame, which it does not compute yet. restir validate "
+                         "tests each frame of an animated scene on its own (docs/guide/animation.md)")
+
+
+def check_picklable(scene) -> None:
+    """An animated scene sent to worker processes needs an animation that pickles (keyframes, a
+    glTF file's; a lambda or a local function does not)."""
+    import pickle
+
+    if scene.animation is None:
+        return
+    try:
+        pickle.dumps(scene.animation)
+    except Exception:
+        raise SceneError("the scene's animation callback cannot be sent to worker processes (a lambda or a "
+                         "local function does not pickle): use keyframes (restir.Motion), a module-level "
+                         "function, or one worker") from None
+
+
 def animate(scene, motions: dict | None = None, callback=None, frames: int | None = None):
     """`scene` (not changed) with an animation: a copy whose objects move as `motions`
     ({name: restir.Motion}) and/or `callback` (fn(frame) -> {name: {"to_world": 4x4,

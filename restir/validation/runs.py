@@ -155,11 +155,18 @@ def validate(scene, config: RenderConfig, runs: int, reference: RenderConfig, re
              tile: int = 8, alpha: float = 1e-3, max_mdb: float = DEFAULT_MAX_MDB, workers: int = 1,
              ray: str | None = None) -> Validation:
     """Compare `config` against `reference` (both noisy; Welch z per channel,
-    docs/validation.md#the-z-tests-image-tile-and-pixel);
+    docs/validation.md#the-z-tests-image-tile-and-pixel), on an animated scene frame by frame
+    (each run's frames side by side: IndependentRuns per_frame);
     a pass needs a minimum detectable bias of at most `max_mdb` (see Validation.verdict). The runs
     are independent tasks: `workers` local processes or a Ray cluster (restir/fanout.py)."""
-    tested = IndependentRuns(scene, config, runs, seed0=1000, workers=workers, ray=ray)
-    ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000, workers=workers, ray=ray)
+    per_frame = scene.animation is not None  # every frame against the same frame of the reference's runs
+    if per_frame and (workers > 1 or ray is not None):
+        from ..scene.animation import check_picklable
+
+        check_picklable(scene)
+    tested = IndependentRuns(scene, config, runs, seed0=1000, workers=workers, ray=ray, per_frame=per_frame)
+    ref = IndependentRuns(scene, reference, reference_runs or runs, seed0=900_000, workers=workers, ray=ray,
+                          per_frame=per_frame)
     rep = compare(tested, ref.image, ref.batch_variance_of_mean, other=ref, tile=tile, alpha=alpha)
     return Validation(rep, tested, ref, max_mdb)
 

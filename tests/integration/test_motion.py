@@ -100,3 +100,35 @@ def test_path_reuse_temporal_reuse_is_refused_on_an_animated_scene(method, keys)
     r = restir.render(scene("all"), method=method, spp=1, frames=2, width=8, height=8, keep_frames=True,
                       settings={k: False for k in keys})
     assert r.frame_images.shape == (2, 8, 8, 3)
+
+
+def test_validate_tests_an_animated_scene_frame_by_frame():
+    """restir.validation.validate on an animated scene: each run's frames side by side, each
+    against the same frame of the reference's runs (the z map is as wide as the frames)."""
+    from restir.validation import validate
+
+    cfg = restir.RenderConfig(method="restir-di", spp=1, frames=3, width=8, height=8)
+    ref = restir.RenderConfig(method="pt", spp=2, frames=3, width=8, height=8, max_depth=2)
+    v = validate(scene("switch"), cfg, 4, ref)
+    assert v.zmap().shape[:2] == (8, 24)
+
+
+def test_one_reference_measurements_refuse_an_animated_scene():
+    """compare and sweep measure every frame against one image: an animated scene is refused
+    there rather than measured against the wrong image."""
+    from restir.compare import compare
+    from restir.compare.sweep import sweep
+
+    with pytest.raises(restir.SceneError, match="animated.*reference per frame"):
+        compare(scene("occluder"), ["pt"], frames=2, width=8, height=8)
+    with pytest.raises(restir.SceneError, match="animated.*reference per frame"):
+        sweep(scene("occluder"), "restir-di", ["candidates=4,8"], frames=2, width=8, height=8)
+
+
+def test_a_callback_that_does_not_pickle_is_refused_for_worker_processes():
+    from restir.validation import validate
+
+    moving = restir.animate(restir.load_scene("builtin:cornell-box"), callback=lambda f: {})
+    cfg = restir.RenderConfig(method="pt", spp=1, frames=2, width=8, height=8)
+    with pytest.raises(restir.SceneError, match="does not pickle"):
+        validate(moving, cfg, 2, cfg, workers=2)
