@@ -45,8 +45,9 @@ _CLOSEST = r"""
     ((RestirIntersectFn)(size_t)embree_fn)((void*)(size_t)embree_scene, &rh, nullptr);
     if (rh.geom_id == 0xFFFFFFFFu)
         return wp::vec4(-1.0f, 0.0f, 0.0f, 0.0f);
-    // Embree: p = (1-u-v) p0 + u p1 + v p2; Warp: p = u p0 + v p1 + (1-u-v) p2
-    return wp::vec4(rh.tfar, 1.0f - rh.u - rh.v, rh.u, (float)rh.prim_id);
+    // Embree: p = (1-u-v) p0 + u p1 + v p2; Warp: p = u p0 + v p1 + (1-u-v) p2. A geometry's ID is
+    // its first triangle (restir/embree.py), so the triangle is geom_id + prim_id.
+    return wp::vec4(rh.tfar, 1.0f - rh.u - rh.v, rh.u, (float)(rh.geom_id + rh.prim_id));
 #endif
 """
 

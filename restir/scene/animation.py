@@ -229,32 +229,63 @@ def posed_scene(scene, frame: int):
         if name in scene.objects:
             lo, hi = scene.objects[name]
             if m is not None:
-                det = np.linalg.det(m[:3, :3])
-                if abs(det) <= 1e-12:
-                    raise SceneError(f"frame {frame}: the transform of '{name}' is singular")
-                if det < 0:  # it would turn the triangles' winding, and with it which side emits
-                    raise SceneError(f"frame {frame}: the transform of '{name}' mirrors it (negative determinant)")
-                pos[lo:hi] = transform_points(m, scene.positions[lo:hi].reshape(-1, 3)).reshape(-1, 3, 3)
-                nrm[lo:hi] = transform_normals(m, scene.normals[lo:hi].reshape(-1, 3)).reshape(-1, 3, 3)
+                pos[lo:hi], nrm[lo:hi], t = posed_object(scene, name, m, frame)
                 if tan is not None:
-                    t = scene.tangents[lo:hi, :, :3].reshape(-1, 3) @ m[:3, :3].T
-                    ln = np.linalg.norm(t, axis=1, keepdims=True)
-                    tan[lo:hi, :, :3] = (t / np.where(ln > 0, ln, 1.0)).reshape(-1, 3, 3)
+                    tan[lo:hi] = t
             emis[lo:hi] = scene.tri_emission[lo:hi] * e
         else:
             i = scene.delta_light_names[name]
-            d = dataclasses.replace(lights[i])
-            if m is not None:
-                d.position = transform_points(m, np.asarray(d.position, np.float64)[None])[0]
-                axis = m[:3, :3] @ np.asarray(d.axis, np.float64)
-                d.axis = axis / np.linalg.norm(axis)
-            d.intensity = np.asarray(d.intensity, np.float64) * e
-            lights[i] = d
+            lights[i] = posed_delta_light(lights[i], m, e)
     out = copy.copy(scene)
     out.positions, out.normals = pos.astype(np.float32), nrm.astype(np.float32)
     out.tangents = tan.astype(np.float32) if tan is not None else None
     out.tri_emission, out.delta_lights = emis.astype(np.float32), lights
     return out
+
+
+def posed_object(scene, name: str, m: np.ndarray, frame: int) -> tuple:
+    """An object's rest triangles under transform m: (positions, normals, tangents or None), each
+    (n, 3, k) float32; a singular or mirroring m refused."""
+    det = np.linalg.det(m[:3, :3])
+    if abs(det) <= 1e-12:
+        raise SceneError(f"frame {frame}: the transform of '{name}' is singular")
+    if det < 0:  # it would turn the triangles' winding, and with it which side emits
+        raise SceneError(f"frame {frame}: the transform of '{name}' mirrors it (negative determinant)")
+    lo, hi = scene.objects[name]
+    pos = transform_points(m, scene.positions[lo:hi].reshape(-1, 3)).reshape(-1, 3, 3).astype(np.float32)
+    nrm = transform_normals(m, scene.normals[lo:hi].reshape(-1, 3)).reshape(-1, 3, 3).astype(np.float32)
+    tan = None
+    if scene.tangents is not None:
+        tan = scene.tangents[lo:hi].copy()
+        t = tan[:, :, :3].reshape(-1, 3) @ m[:3, :3].T
+        ln = np.linalg.norm(t, axis=1, keepdims=True)
+        tan[:, :, :3] = (t / np.where(ln > 0, ln, 1.0)).reshape(-1, 3, 3)
+        tan = tan.astype(np.float32)
+    return pos, nrm, tan
+
+
+def posed_delta_light(d, m, e: float):
+    """A delta light (DeltaLightDesc) moved by m (None: where it is) and its intensity times e."""
+    d = dataclasses.replace(d)
+    if m is not None:
+        d.position = transform_points(m, np.asarray(d.position, np.float64)[None])[0]
+        axis = m[:3, :3] @ np.asarray(d.axis, np.float64)
+        d.axis = axis / np.linalg.norm(axis)
+    d.intensity = np.asarray(d.intensity, np.float64) * e
+    return d
+
+
+def moving_objects(scene, frame: int) -> set:
+    """The objects with triangles that the animation gives a transform at `frame`."""
+    if scene.animation is None:
+        return set()
+    return {n for n, (m, _) in scene.animation.state(frame).items() if m is not None and n in scene.objects}
+
+
+def moving_ranges(scene, frame: int) -> list:
+    """The triangle ranges [lo, hi) of moving_objects (what the ray tracer refits; the rest of the
+    scene keeps its structure)."""
+    return sorted(scene.objects[n] for n in moving_objects(scene, frame))
 
 
 def refuse_for_one_reference(scene, what: str) -> None:

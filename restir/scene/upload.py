@@ -18,8 +18,9 @@ from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONS
                             MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
-from .animation import posed_scene
+from .animation import moving_objects, moving_ranges, posed_delta_light, posed_object, posed_scene
 from .scene import TEXTURED_PARAMETERS, Scene
+from .transforms import transform_points
 
 MATERIAL_KIND = {k.name: k.kind for k in MATERIAL_KINDS}
 MATERIAL_KIND["mixture"] = MAT_DIFFUSE  # never evaluated: scene_device.material_index_at picks one of its two
@@ -81,6 +82,12 @@ def bump_struct(b) -> Bump:
     return s
 
 
+def _new_slot() -> dict:
+    """One frame's device data: its arrays, BVH, Embree scene, the frame and the objects moved then."""
+    return {"arrays": [], "mesh": None, "embree": None, "frame": None, "moved": set(), "normals": None,
+            "tangents": None, "tri_emission": None, "tri_light_pdf": None}
+
+
 class DeviceScene:
     """Owns every device array of one scene; `.scene` and `.camera` are the kernel arguments."""
 
@@ -103,8 +110,12 @@ class DeviceScene:
     def _scene_struct(self, sc: Scene) -> SceneDevice:
         s = SceneDevice()
         self._slot = 0
-        self._slots = [{"arrays": [], "mesh": None, "embree": None}, {"arrays": [], "mesh": None, "embree": None}]
+        self._slots = [_new_slot(), _new_slot()]
         self.frame = 0
+        # the triangles that can emit (an animation scales emission, never lights a triangle up) and
+        # the rest pose's bounding radius (a directional light's power: its selection probability)
+        self._emitters = np.nonzero(np.any(sc.tri_emission > 0, axis=1))[0].astype(np.int32)
+        self._radius = sc.bounding_radius() if sc.delta_lights else 0.0
         posed = posed_scene(sc, 0) if sc.animation is not None else sc
         self._geometry(s, posed, self._slots[0])
         self.tracer_used = "embree" if self.embree is not None else "warp"
@@ -128,6 +139,9 @@ class DeviceScene:
         s.num_mixtures = int(sum(m.mix is not None for m in sc.materials))
         s.material_bump = self._arr([bump_struct(m.bump) for m in sc.materials] or [bump_struct(None)], Bump)
         self._lights(s, posed, self._slots[0])
+        if sc.animation is not None:
+            self._slots[0]["frame"] = 0
+            self._slots[0]["moved"] = moving_objects(sc, 0)
 
         s.env_kind = int({"none": ENV_NONE, "constant": ENV_CONSTANT, "envmap": ENV_MAP}[sc.env_kind])
         s.env_radiance = wp.vec3(*sc.env_radiance)
@@ -165,7 +179,8 @@ class DeviceScene:
         mesh = slot["mesh"]
         if mesh is not None and mesh.points.shape[0] == len(pts):
             mesh.points.assign(pts)
-            mesh.refit()
+            if slot["embree"] is None:  # with Embree (the CPU) Warp's BVH is never traced
+                mesh.refit()
         else:
             mesh = slot["mesh"] = wp.Mesh(points=wp.array(pts, dtype=wp.vec3, device=self.device),
                                           indices=wp.array(np.arange(len(pts), dtype=np.int32), dtype=wp.int32,
@@ -173,53 +188,86 @@ class DeviceScene:
         self.mesh = mesh
         s.mesh = mesh.id
         s.embree_scene = s.embree_intersect = s.embree_occluded = wp.uint64(0)
-        slot["embree"] = None
         if wp.get_device(self.device).is_cpu and self.tracer in ("auto", "embree"):
             from ..embree import EmbreeScene, library
 
             if library() is not None:
-                slot["embree"] = EmbreeScene(sc.positions)
-                s.embree_scene = wp.uint64(slot["embree"].scene)
-                s.embree_intersect = wp.uint64(slot["embree"].intersect_fn)
-                s.embree_occluded = wp.uint64(slot["embree"].occluded_fn)
+                slot["embree"] = EmbreeScene(sc.positions, moving_ranges(self.host, self.frame))
             elif self.tracer == "embree":
                 raise RuntimeError("Embree was requested but is not available (pip install embreex)")
         elif self.tracer == "embree":
             raise RuntimeError("Embree traces on the CPU only")
         self.embree = slot["embree"]
+        if self.embree is not None:
+            s.embree_scene = wp.uint64(self.embree.scene)
+            s.embree_intersect = wp.uint64(self.embree.intersect_fn)
+            s.embree_occluded = wp.uint64(self.embree.occluded_fn)
         s.positions = mesh.points
-        s.normals = self._slot_arr(slot, sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
+        s.normals = slot["normals"] = self._slot_arr(slot, sc.normals.reshape(-1, 3).astype(np.float32), wp.vec3)
         s.has_tangents = int(sc.tangents is not None)
-        s.tangents = self._slot_arr(slot, sc.tangents.reshape(-1, 4) if sc.tangents is not None
-                                    else np.zeros((1, 4), np.float32), wp.vec4)
+        s.tangents = slot["tangents"] = self._slot_arr(slot, sc.tangents.reshape(-1, 4) if sc.tangents is not None
+                                                       else np.zeros((1, 4), np.float32), wp.vec4)
 
     def _lights(self, s: SceneDevice, sc: Scene, slot: dict) -> None:
-        """One alias table over the emissive triangles, then the delta lights, by power (the frame's
-        emission and geometry), into `slot` and s."""
-        s.tri_emission = self._slot_arr(slot, sc.tri_emission.astype(np.float32), wp.vec3)
-        power = sc.light_power()
-        lights = np.nonzero(power > 0)[0].astype(np.int32)
-        delta_power = sc.delta_light_power()
+        """The lights of the posed scene sc (its every triangle's emission uploaded: the slot's first
+        frame)."""
+        E = self._emitters
+        s.tri_emission = slot["tri_emission"] = self._slot_arr(slot, sc.tri_emission.astype(np.float32), wp.vec3)
+        slot["tri_light_pdf"] = None
+        self._light_tables(s, slot, sc.positions[E], sc.tri_emission[E], sc.delta_lights)
+
+    def _light_tables(self, s: SceneDevice, slot: dict, pos: np.ndarray, emission: np.ndarray, deltas_of) -> None:
+        """One alias table over the emissive triangles, then the delta lights, by power, from the
+        frame's emitters (their positions and emission, rows of self._emitters) and delta lights,
+        into `slot` and s; the per-triangle pdf made (the slot's first frame) or written at the
+        emitters alone (the other triangles never emit)."""
+        E = self._emitters
+        p = pos.astype(np.float64)
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+        lum = emission @ np.array([0.2126, 0.7152, 0.0722])
+        twosided = self.host.tri_emit_twosided
+        sides = 1.0 if twosided is None else 1.0 + twosided[E]
+        power = np.maximum(lum, 0) * area * sides  # Scene.light_power at the emitters
+        on = np.nonzero(power > 0)[0]
+        lights = E[on]
+        delta_power = np.array([d.power(self._radius) for d in deltas_of], np.float64)
         deltas = np.nonzero(delta_power > 0)[0].astype(np.int32)
-        tri_pdf = np.zeros(sc.num_triangles, np.float32)
-        delta_pmf = np.zeros(max(len(sc.delta_lights), 1), np.float32)
+        pdf = np.zeros(len(E), np.float32)
+        delta_pmf = np.zeros(max(len(deltas_of), 1), np.float32)
         entries = np.concatenate([lights, LIGHT_DELTA_BASE - deltas]).astype(np.int32)
         if len(entries):
-            prob, alias, pmf = alias_table(np.concatenate([power[lights], delta_power[deltas]]))
-            tri_pdf[lights] = pmf[:len(lights)] / sc.triangle_areas()[lights]
+            prob, alias, pmf = alias_table(np.concatenate([power[on], delta_power[deltas]]))
+            pdf[on] = pmf[:len(lights)] / area[on]
             delta_pmf[deltas] = pmf[len(lights):]
         else:
             prob, alias = np.ones(1, np.float32), np.zeros(1, np.int32)
+        if slot["tri_light_pdf"] is None:
+            tri_pdf = np.zeros(self.host.num_triangles, np.float32)
+            tri_pdf[E] = pdf
+            slot["tri_light_pdf"] = self._slot_arr(slot, tri_pdf, float)
+        else:
+            self._write_at(slot["tri_light_pdf"], E, pdf, float)
+        s.tri_light_pdf = slot["tri_light_pdf"]
+        slot["arrays"] = [a for a in slot["arrays"] if a is s.tri_emission or a is s.tri_light_pdf
+                          or a is slot["normals"] or a is slot["tangents"]]
         s.light_tri = self._slot_arr(slot, entries if len(entries) else np.zeros(1, np.int32), wp.int32)
         s.light_prob = self._slot_arr(slot, prob, float)
         s.light_alias = self._slot_arr(slot, alias, wp.int32)
         s.num_tri_lights = int(len(lights))
-        s.tri_light_pdf = self._slot_arr(slot, tri_pdf, float)
-        s.delta_lights = self._slot_arr(slot, [delta_light_struct(d) for d in sc.delta_lights] or [DeltaLight()],
+        s.delta_lights = self._slot_arr(slot, [delta_light_struct(d) for d in deltas_of] or [DeltaLight()],
                                         DeltaLight)
         s.delta_light_pmf = self._slot_arr(slot, delta_pmf, float)
         s.num_delta_lights = int(len(deltas))
         self._has_lights = bool(len(entries))
+
+    def _write_at(self, dest, index: np.ndarray, values: np.ndarray, dtype) -> None:
+        """dest[index] = values on the device, one copy per run of consecutive indices."""
+        if not len(index):
+            return
+        src = wp.array(values, dtype=dtype, device=self.device)
+        breaks = np.nonzero(np.diff(index) != 1)[0] + 1
+        for run in np.split(np.arange(len(index)), breaks):
+            wp.copy(dest, src, dest_offset=int(index[run[0]]), src_offset=int(run[0]), count=len(run))
 
     def _env_select(self, s: SceneDevice, sc: Scene) -> None:
         has_env = sc.env_kind != "none"
@@ -250,20 +298,89 @@ class DeviceScene:
     def set_frame(self, frame: int) -> None:
         """Make `scene` the scene at `frame` (an animated scene; a static one has one scene). The
         struct of the frame before stays valid (its arrays live in the other of two slots) until
-        the frame after this one is set: an integrator keeps it as the previous sample's domain."""
+        the frame after this one is set: an integrator keeps it as the previous sample's domain.
+
+        A slot's first frame uploads everything. Later frames into the same slot (two frames on)
+        write only the objects that move at this frame or moved at the slot's last frame, refit
+        their ray-tracing structures (Embree's per-geometry BVHs of a dynamic scene, or Warp's
+        BVH), and write the light tables' entries at the emitters: the rest of the scene is the
+        same in every frame."""
         if not self.animated or frame == self.frame:
             return
-        posed = posed_scene(self.host, frame)
         s = SceneDevice()
         for name in SceneDevice.vars:
             setattr(s, name, getattr(self.scene, name))
         self._slot = 1 - self._slot
         slot = self._slots[self._slot]
-        self._geometry(s, posed, slot)
-        self._lights(s, posed, slot)
-        self._env_select(s, self.host)
-        self.scene = s
         self.frame = frame
+        host = self.host
+        state = host.animation.state(frame)
+        moving = {n for n, (m, _) in state.items() if m is not None and n in host.objects}  # moving_objects
+        if slot["frame"] is None or not self._update_geometry(s, slot, state, moving | slot["moved"]):
+            posed = posed_scene(host, frame)
+            self._geometry(s, posed, slot)
+            self._lights(s, posed, slot)
+        else:
+            pos, emission, deltas = self._posed_lights(state)
+            s.tri_emission = slot["tri_emission"]
+            self._write_at(s.tri_emission, self._emitters, emission.astype(np.float32), wp.vec3)
+            self._light_tables(s, slot, pos, emission, deltas)
+        self._env_select(s, host)
+        slot["frame"], slot["moved"] = frame, moving
+        self.scene = s
+
+    def _update_geometry(self, s: SceneDevice, slot: dict, state: dict, names: set) -> bool:
+        """Write the named objects' triangles at this frame into the slot's arrays and refit; False
+        where the slot's Embree scene does not hold one of them apart (it is then built again)."""
+        host = self.host
+        parts = {}
+        for name in sorted(names):
+            lo, hi = host.objects[name]
+            m = state.get(name, (None, 1.0))[0]
+            if m is not None:
+                parts[lo] = (hi, *posed_object(host, name, m, self.frame))
+            else:
+                tan = host.tangents[lo:hi] if host.tangents is not None else None
+                parts[lo] = (hi, host.positions[lo:hi], host.normals[lo:hi], tan)
+        embree = slot["embree"]
+        if embree is not None and not {(lo, hi) for lo, (hi, *_) in parts.items()} <= set(embree.dynamic):
+            return False
+        mesh = slot["mesh"]
+        for lo, (hi, pos, nrm, tan) in parts.items():
+            n = 3 * (hi - lo)
+            wp.copy(mesh.points, wp.array(pos.reshape(-1, 3), dtype=wp.vec3, device=self.device), 3 * lo, 0, n)
+            wp.copy(slot["normals"], wp.array(nrm.reshape(-1, 3), dtype=wp.vec3, device=self.device), 3 * lo, 0, n)
+            if tan is not None:
+                wp.copy(slot["tangents"], wp.array(tan.reshape(-1, 4), dtype=wp.vec4, device=self.device), 3 * lo, 0, n)
+        if embree is not None:
+            embree.update({lo: pos for lo, (hi, pos, *_) in parts.items()})
+            s.embree_scene = wp.uint64(embree.scene)
+        else:
+            mesh.refit()
+        self.mesh, self.embree = mesh, embree
+        s.mesh, s.positions, s.normals, s.tangents = mesh.id, mesh.points, slot["normals"], slot["tangents"]
+        return True
+
+    def _posed_lights(self, state: dict) -> tuple:
+        """The emitters' positions and emission (rows of self._emitters) and the delta lights at this
+        frame's state."""
+        host = self.host
+        E = self._emitters
+        pos, emission = host.positions[E].copy(), host.tri_emission[E].copy()
+        lights = list(host.delta_lights)
+        for name, (m, e) in state.items():
+            if name in host.objects:
+                lo, hi = host.objects[name]
+                inside = np.nonzero((E >= lo) & (E < hi))[0]
+                if not len(inside):
+                    continue
+                if m is not None:
+                    pos[inside] = transform_points(m, host.positions[E[inside]].reshape(-1, 3)).reshape(-1, 3, 3)
+                emission[inside] = host.tri_emission[E[inside]] * e
+            else:
+                i = host.delta_light_names[name]
+                lights[i] = posed_delta_light(lights[i], m, e)
+        return pos.astype(np.float32), emission.astype(np.float32), lights
 
     def _textures(self, descs) -> tuple:
         """The texture records and the packed texels (element 0 a black texel, so the array is

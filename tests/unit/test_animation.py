@@ -221,3 +221,40 @@ def test_motion_vectors_follow_the_moving_object(device):
     print(f"{on_block.sum()} block pixels; history on the block: own motion {found['own']:.2f}, "
           f"camera's {found['camera']:.2f}")
     assert found["own"] > 0.85 and found["camera"] < found["own"] - 0.2
+
+
+@wp.kernel
+def rays_kernel(scene: SceneDevice, o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3),
+                out: wp.array(dtype=wp.int32)):
+    i = wp.tid()
+    out[i] = trace_closest(scene, o[i], d[i], 1.0e30).tri
+
+
+def test_frame_updates_equal_a_full_upload(device):
+    """Frames after a slot's first write only what moves (the moving objects' triangles, the
+    emitters' entries of the light tables) and refit: every array, the light tables and the hits
+    of random rays equal those of the same frame uploaded whole."""
+    from tests.scenes import motion_scene
+
+    scene = motion_scene("all")
+    rng = np.random.default_rng(3)
+    n = 4096
+    o = wp.array(rng.uniform([0.0, 0.0, -0.5], [0.55, 0.55, 0.0], (n, 3)).astype(np.float32), dtype=wp.vec3,
+                 device=device)
+    d = rng.normal(size=(n, 3))
+    d[:, 2] = np.abs(d[:, 2])
+    d = wp.array((d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32), dtype=wp.vec3, device=device)
+    a_hits, b_hits = (wp.zeros(n, dtype=wp.int32, device=device) for _ in range(2))
+    inc = DeviceScene(scene, device)
+    for f in range(1, 8):
+        inc.set_frame(f)
+        whole = DeviceScene(scene, device)
+        whole.set_frame(f)  # its other slot's first frame: everything uploaded
+        a, b = inc.scene, whole.scene
+        for name in ("positions", "normals", "tri_emission", "tri_light_pdf", "light_tri", "light_prob",
+                     "light_alias", "delta_light_pmf"):
+            np.testing.assert_array_equal(getattr(a, name).numpy(), getattr(b, name).numpy(), err_msg=f"{f} {name}")
+        assert (a.num_tri_lights, a.env_select_prob) == (b.num_tri_lights, b.env_select_prob)
+        wp.launch(rays_kernel, dim=n, inputs=[a, o, d, a_hits], device=device)
+        wp.launch(rays_kernel, dim=n, inputs=[b, o, d, b_hits], device=device)
+        np.testing.assert_array_equal(a_hits.numpy(), b_hits.numpy(), err_msg=f"frame {f}")
