@@ -277,13 +277,9 @@ def method_settings(scene: Scene, config: RenderConfig):
                                    rr_depth=scene.rr_depth, hide_emitters=scene.hide_emitters)
     settings.check_common()
     cls.check_settings(settings)
-    if scene.animation is not None:
-        on = [key for key in cls.STATIC_SCENE_TEMPORAL if settings.get(key)]
-        if on:
-            raise ConfigError(f"the scene is animated, and {config.method}'s temporal reuse ({', '.join(on)}) does "
-                              "not yet evaluate its history in the previous frame's scene, so it would be biased "
-                              f"where things move: --set {'=false --set '.join(on)}=false (restir-di's temporal "
-                              "reuse follows a moving scene; docs/guide/animation.md)")
+    problem = cls.motion_refusal(settings) if scene.animation is not None else None
+    if problem:
+        raise ConfigError(f"the scene is animated, and {problem} (docs/guide/animation.md)")
     return cls, settings, notes
 
 

@@ -49,9 +49,6 @@ class Integrator:
     stage_prefix = ""  # prepended to stage names in the timings (a method used inside another: "di.")
     STAGES: tuple[str, ...] = ()
     KERNELS: tuple = ()   # every kernel a frame launches; compiled before any stage is timed
-    # the method's temporal-reuse settings whose history is not yet evaluated in the previous
-    # frame's scene: refused on an animated scene (api.method_settings) rather than biased
-    STATIC_SCENE_TEMPORAL: tuple[str, ...] = ()
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
@@ -60,6 +57,13 @@ class Integrator:
     @classmethod
     def check_settings(cls, settings) -> None:
         """Refuse settings the method cannot render (a ConfigError), before anything is built."""
+
+    @staticmethod
+    def motion_refusal(settings) -> str | None:
+        """Why these settings cannot render an animated scene unbiased (their temporal reuse does
+        not evaluate its history in the previous frame's scene), or None; api.method_settings refuses
+        the render with it."""
+        return None
 
     def __init__(self, dscene, settings: Settings, device: str, slices: int | None = None, on_compile=None):
         """on_compile: called with no argument when loading the kernels takes long (they are

@@ -1,4 +1,7 @@
-"""Temporal reuse under scene motion (docs/theory/restir_di.md#temporal-reuse-under-motion).
+"""Temporal reuse under scene motion (docs/theory/restir_di.md#temporal-reuse-under-motion,
+docs/theory/restir_pt.md#temporal-reuse-under-motion): ReSTIR DI, and ReSTIR PT with the replay
+shift (max_depth 3, the same scenes and test), with their biased switches detected; the shifts and
+methods that cannot follow motion refused.
 
 Each run renders 8 frames of an animated Cornell box (tests/scenes.py motion_scene: a sliding
 block, a moving light, a light switched off and on, a block that vanishes and comes back, and all
@@ -90,15 +93,55 @@ def test_the_harness_refuses_the_biased_switch():
         IndependentRuns(scene("occluder"), cfg, 2)
 
 
-@pytest.mark.parametrize("method,keys", [("restir-pt", ["temporal"]),
-                                         ("suffix-restir", ["prefix.temporal", "suffix.temporal"])])
-def test_path_reuse_temporal_reuse_is_refused_on_an_animated_scene(method, keys):
-    """Their histories are not yet evaluated in the previous frame's scene: refused, not biased;
-    with it off they render (spatial reuse stays within a frame)."""
+PT_DEPTH = 3  # one indirect bounce: the replayed paths cross the moving objects and lights
+
+
+def pt_runs(kind, method, spp, seed0, camera="none", settings=None, allow_mutation=False):
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=PT_DEPTH,
+                              camera_motion=camera, camera_speed=3.0, settings=settings or {})
+    return IndependentRuns(scene(kind), cfg, RUNS, seed0, allow_mutation=allow_mutation, per_frame=True)
+
+
+@functools.lru_cache(maxsize=None)
+def pt_reference(kind, camera="none"):
+    return pt_runs(kind, "pt", 16, 500_000, camera)
+
+
+@pytest.mark.parametrize("kind,camera", [(k, "none") for k in MOTION_KINDS] + [("all", "orbit")])
+def test_restir_pt_with_the_replay_shift_under_motion_matches_the_path_tracer(kind, camera):
+    """ReSTIR PT's defaults but the replay shift, max_depth 3, 4 spp a frame: the history's path
+    and the current one each replayed in the other frame's scene."""
+    pt = pt_runs(kind, "restir-pt", 4, 10_000, camera, {"shift": "replay"})
+    ref = pt_reference(kind, camera)
+    rep = check(pt, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    print(kind, camera, f"MDB {rep.mdb:.4f}", pt.counters)
+    assert rep.mdb < MAX_MDB
+
+
+@pytest.mark.parametrize("kind", ["occluder", "light", "switch", "appear"])
+def test_restir_pt_history_replayed_in_the_current_scene_is_detected(kind):
+    """temporal.previous_scene=false at 1 spp a frame: the current sample replayed in the current
+    scene for its density in the previous domain. Detected at tile level."""
+    pt = pt_runs(kind, "restir-pt", 1, 10_000, settings={"shift": "replay", "temporal.previous_scene": False},
+                 allow_mutation=True)
+    ref = pt_reference(kind)
+    rep = compare(pt, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    worst = max(float(np.abs(r.tile_z).max()) / r.tile_crit for r in rep.reports)
+    print(kind, f"max tile |z| / threshold {worst:.2f}")
+    assert worst > 1.0
+
+
+@pytest.mark.parametrize("method,settings,fix", [
+    ("restir-pt", {}, {"shift": "replay"}),
+    ("restir-pt", {"shift": "reconnection"}, {"temporal": False}),
+    ("suffix-restir", {}, {"prefix.temporal": False, "suffix.temporal": False})])
+def test_temporal_reuse_that_cannot_follow_motion_is_refused(method, settings, fix):
+    """Reconnection and hybrid shifts keep a path's suffix as cached radiance, which is not traced
+    again in each frame's scene: refused, not biased, with the settings that render."""
     with pytest.raises(restir.ConfigError, match="animated"):
-        restir.render(scene("all"), method=method, spp=1, frames=2, width=8, height=8)
+        restir.render(scene("all"), method=method, spp=1, frames=2, width=8, height=8, settings=settings)
     r = restir.render(scene("all"), method=method, spp=1, frames=2, width=8, height=8, keep_frames=True,
-                      settings={k: False for k in keys})
+                      settings={**settings, **fix})
     assert r.frame_images.shape == (2, 8, 8, 3)
 
 

@@ -19,6 +19,8 @@ scenes (tests/data/feature_scene.py: point, spot and directional lights mixed wi
 and an environment, the points and spots alone, the sun alone, a thin lens) with LIGHT_CELLS.
 """
 
+import functools
+
 import pytest
 
 from tests.helpers import FULL_MATRIX_SCENES, LIGHT_MATRIX_SCENES, MATERIAL_MATRIX_SCENES, PARTIAL_MATRIX_SCENES, run_cell
@@ -120,3 +122,54 @@ def test_restir_pt_matrix_on_delta_lights_and_a_lens(name, config):
     settings, motion = MATRIX[config]
     print(config, end=" ")
     run_cell(name, "restir-pt", settings, motion, config)
+
+
+# Scenes in motion (tests/scenes.py motion_scene; docs/validation.md#scenes-in-motion), each with a
+# still and an orbiting camera: temporal reuse alone (cap 20) and the defaults, both with the
+# replay shift (the shift that traces a path whole in each frame's scene; the others are refused
+# on an animated scene), and the official direct light (direct=restir-di: its ReSTIR DI component
+# reuses in motion too). 64 runs x 8 frames at 32x32, max_depth 3, 4 spp a frame, each run's
+# frames side by side against the path tracer's (16 spp) of the same frames.
+MOTION_CELLS = {
+    "C2-replay-cap-20": {**TEMPORAL, "shift": "replay", "temporal.cap": 20.0},
+    "C4-replay": {"shift": "replay"},
+    "C4-replay-direct-restir-di": {"shift": "replay", "direct": "restir-di"},
+}
+
+
+def _motion_runs(kind, method, spp, seed0, motion, settings=None):
+    import restir
+    from restir.validation import IndependentRuns
+    from tests.helpers import MATRIX_CAMERAS
+    from tests.scenes import motion_scene
+
+    camera, speed, jitter = MATRIX_CAMERAS[motion]
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=8, width=32, height=32, max_depth=3,
+                              camera_motion=camera, camera_speed=speed, jitter=jitter, settings=settings or {})
+    return IndependentRuns(_motion_scene(kind), cfg, 64, seed0, per_frame=True)
+
+
+@functools.lru_cache(maxsize=None)
+def _motion_scene(kind):
+    from tests.scenes import motion_scene
+
+    return motion_scene(kind)
+
+
+@functools.lru_cache(maxsize=None)
+def _motion_reference(kind, motion):
+    return _motion_runs(kind, "pt", 16, 500_000, motion)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config", list(MOTION_CELLS))
+@pytest.mark.parametrize("motion", ["none", "orbit"])
+@pytest.mark.parametrize("kind", ["occluder", "light", "switch", "appear", "all"])
+def test_restir_pt_matrix_in_motion(kind, motion, config):
+    from tests.helpers import check
+
+    r = _motion_runs(kind, "restir-pt", 4, 10_000, motion, MOTION_CELLS[config])
+    ref = _motion_reference(kind, motion)
+    print(kind, motion, config, "counters", r.counters)
+    rep = check(r, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
+    assert rep.mdb < 0.06

@@ -230,10 +230,12 @@ def rays_kernel(scene: SceneDevice, o: wp.array(dtype=wp.vec3), d: wp.array(dtyp
     out[i] = trace_closest(scene, o[i], d[i], 1.0e30).tri
 
 
-def test_frame_updates_equal_a_full_upload(device):
+@pytest.mark.parametrize("tracer", ["auto", "warp"])
+def test_frame_updates_equal_a_full_upload(device, tracer):
     """Frames after a slot's first write only what moves (the moving objects' triangles, the
-    emitters' entries of the light tables) and refit: every array, the light tables and the hits
-    of random rays equal those of the same frame uploaded whole."""
+    emitters' entries of the light tables) and refit (Embree's dynamic scene, or Warp's BVH): every
+    array, the light tables and the hits of random rays equal those of the same frame uploaded
+    whole."""
     from tests.scenes import motion_scene
 
     scene = motion_scene("all")
@@ -245,10 +247,10 @@ def test_frame_updates_equal_a_full_upload(device):
     d[:, 2] = np.abs(d[:, 2])
     d = wp.array((d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32), dtype=wp.vec3, device=device)
     a_hits, b_hits = (wp.zeros(n, dtype=wp.int32, device=device) for _ in range(2))
-    inc = DeviceScene(scene, device)
+    inc = DeviceScene(scene, device, tracer)
     for f in range(1, 8):
         inc.set_frame(f)
-        whole = DeviceScene(scene, device)
+        whole = DeviceScene(scene, device, tracer)
         whole.set_frame(f)  # its other slot's first frame: everything uploaded
         a, b = inc.scene, whole.scene
         for name in ("positions", "normals", "tri_emission", "tri_light_pdf", "light_tri", "light_prob",

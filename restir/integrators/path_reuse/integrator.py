@@ -100,6 +100,7 @@ class PathReuseIntegrator(Integrator):
         self.shift_events = self.buffer("shift_events", PassCounts)
         self.shift_counts: dict = {}   # per pass: [reconnections tried, succeeded, replays tried, succeeded]
         self.prev_camera = None
+        self.prev_scene = None  # the scene of the previous sample (the history's domain)
         self.current_camera = self.dscene.camera  # the camera of the sample being rendered
         # ReSTIR DI owns direct light at the primary hit (max_depth >= 2), on this method's G-buffers
         self.di = attach_direct_light(self)
@@ -181,7 +182,16 @@ class PathReuseIntegrator(Integrator):
             self.di.end_sample(camera)
         self.gbuffers.swap()
         self.prev_camera = camera
+        self.prev_scene = self.dscene.scene
         return L
+
+    def history_scene(self):
+        """The scene the history's domain is traced in: the previous sample's (the same as this
+        one's unless the scene moved between them), or with temporal.previous_scene off (where the
+        method has it), this one."""
+        if self.prev_scene is None or not getattr(self.settings, "temporal_previous_scene", True):
+            return self.dscene.scene
+        return self.prev_scene
 
     def resample_sample(self, frame: int, sample: int, direct):
         """The method's passes for one sample after the primary hits; the sample's radiance (a

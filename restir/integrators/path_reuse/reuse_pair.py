@@ -151,13 +151,14 @@ def make_reuse_pair(shift=shift_path, module=None):
         return out
 
     @wp.func(module=module, name=named("temporal_pair"))
-    def temporal_pair(scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir, Mq: float, dq: Domain,
-                      u_current: float, u_history: float) -> Reuse:
+    def temporal_pair(scene: SceneDevice, prev_scene: SceneDevice, c: PathReservoir, dc: Domain, r: PathReservoir,
+                      Mq: float, dq: Domain, u_current: float, u_history: float) -> Reuse:
         """The canonical input c (domain dc) with the history r (domain dq, confidence Mq, already
-        capped): each shifted into the other's domain, generalized balance MIS over the two."""
+        capped): each shifted into the other's domain, generalized balance MIS over the two; c's
+        path is traced in dq's frame's scene (prev_scene: the same as `scene` when nothing moved)."""
         st = Reuse()
         hist = shift_in(scene, r, Mq, c.M, dc)
-        cur = shift_out(scene, c, Mq, dq)
+        cur = shift_out(prev_scene, c, Mq, dq)
         st.tl = tally(tally(ShiftTally(), r, hist.t, hist.tried, 1), c, cur.t, cur.tried, 0)
         st.s = ris_init()
         p_c = luminance(c.F)

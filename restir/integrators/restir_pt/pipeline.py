@@ -98,6 +98,10 @@ class PTSettings(PathReuseSettings):
                           "official ReSTIR PT's choice); nee: the base paths' events at the primary hit summed as "
                           "the path tracer sums them, not resampled (+12 B per pixel)")
     temporal: bool = setting("temporal", True, "temporal reuse of the previous frame's reservoirs (Talbot MIS)")
+    temporal_previous_scene: bool = setting("temporal.previous_scene", True, "an animated scene: the current "
+                                            "sample replayed in the previous frame's scene for its density there "
+                                            "(false: in the current one, biased where things moved; the validation "
+                                            "harness refuses it)")
     temporal_cap: float = setting("temporal.cap", 5.0, "history confidence capped to this x the current one (<= 0: "
                                   "no cap, i.e. 1e6 x; the official value is 20)")
     shade_expected: bool = setting("shade.expected", False, "the image takes the last resampling pass's expected "
@@ -122,7 +126,6 @@ class PTSettings(PathReuseSettings):
 
 class ReSTIRPT(PathReuseIntegrator):
     name = "restir-pt"
-    STATIC_SCENE_TEMPORAL = ("temporal",)
     STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
               "trace_temporal", "trace_initial", "temporal", "mcmc", "spatial", "shade")
     KERNELS = (primary_hits_kernel, trace_temporal_kernel, mcmc_kernel, spatial_kernel, reciprocal_spatial_kernel,
@@ -132,6 +135,14 @@ class ReSTIRPT(PathReuseIntegrator):
     MUTATIONS = MUTATIONS
 
     RESERVOIRS = "reservoirs"
+
+    @staticmethod
+    def motion_refusal(settings) -> str | None:
+        if not settings.temporal or settings.shift == "replay":
+            return None
+        return (f"restir-pt's temporal reuse with the {settings.shift} shift keeps a path's suffix after its "
+                "reconnection vertex as cached radiance, which would have to be traced again in each frame's scene: "
+                "--set shift=replay (traced whole in each frame's scene), or --set temporal=false")
 
     @staticmethod
     def check_settings(settings: PTSettings) -> None:
@@ -198,12 +209,13 @@ class ReSTIRPT(PathReuseIntegrator):
                            [res.current, self.direct_nee])
             if temporal:
                 self.reuse_pass("temporal", temporal_kernel,
-                                [sc, p, self.current_camera, self.prev_camera, gb.current, gb.previous,
-                                 res.previous], scratch=(self.expected,))
+                                [sc, self.history_scene(), p, self.current_camera, self.prev_camera, gb.current,
+                                 gb.previous, res.previous], scratch=(self.expected,))
         else:
             prev_camera = self.prev_camera or self.dscene.camera  # unread without temporal reuse
             self.run_stage("trace_temporal", trace_temporal,
-                           [sc, p, int(temporal), self.current_camera, prev_camera, gb.current, gb.previous,
+                           [sc, self.history_scene(), p, int(temporal), self.current_camera, prev_camera, gb.current,
+                            gb.previous,
                             res.previous, self.emission, self.primary_weight],
                            [res.current, self.direct_nee, self.expected, self.shift_events])
             if temporal:

@@ -3,8 +3,11 @@ this pixel's primary hit was seen, by generalized balance (Talbot) MIS over the 
 (docs/theory/restir_pt.md#temporal-reuse). The previous confidence is capped to temporal_cap x the current one before
 any weight is computed (cap_history). Both samples are shifted: the current one into the
 previous domain (its density there, for its own weight) and the history's into this one.
-The previous domain is the previous primary hit seen by the previous camera, evaluated with the
-current scene: a static scene (api.method_settings refuses temporal reuse on an animated one). The replay is done inline in this pass (no separate retrace
+The previous domain is the previous primary hit seen by the previous camera, in the previous
+frame's scene (`prev_scene`: the current one when nothing moved), where the current sample is
+replayed for its density there. On an animated scene only the replay shift is accepted
+(ReSTIR PT's motion_refusal): the others keep a path's suffix after its reconnection vertex as
+cached radiance, which would have to be traced again in each frame's scene. The replay is done inline in this pass (no separate retrace
 pass): the same function runs for both directions with the same seeds, so the two passes of
 the official code cannot disagree here by construction.
 
@@ -53,14 +56,14 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
     shift_in, _, temporal_pair, _ = make_reuse_pair(shift, module)
 
     @wp.func(module=module or KERNEL_MODULE)
-    def temporal_reuse(scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
-                       prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir), c: PathReservoir,
-                       sc: Shading, pixel: int):
+    def temporal_reuse(scene: SceneDevice, prev_scene: SceneDevice, params: PathReuseParams, camera: Camera,
+                       prev_camera: Camera, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
+                       c: PathReservoir, sc: Shading, pixel: int):
         none = wp.vec4i(0)
         own = sample_output(c)
         if sc.valid == 0:
             return c, none, none, own
-        nq = temporal_neighbor(scene, scene, camera, prev_camera, prev_gb, sc, pixel)
+        nq = temporal_neighbor(prev_scene, prev_scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
             return c, none, none, own
         q = nq.pixel
@@ -74,7 +77,8 @@ def make_temporal_reuse(shift=SHIFT_INLINED, drop_failed: bool = False, module=N
             if shift_in(scene, r, Mq, c.M, dc).t.valid == 0:
                 return c, none, none, own
         # ---- the history's sample shifted here, and the current sample there (its density there)
-        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
+        st = temporal_pair(scene, prev_scene, c, dc, r, Mq, dq, rng_uniform(key, base),
+                           rng_uniform(key, base + wp.uint32(1)))
         return (store(st.chosen, ris_finalize(st.s, 1.0)), st.tl.counts, stage_events(st.s, st.tl.failed, st.tl.rays),
                 st.L)
 
@@ -87,13 +91,14 @@ def make_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, module=
     temporal_reuse = make_temporal_reuse(shift, drop_failed, module)
 
     @wp.kernel(module=module or SPLIT_MODULE)
-    def temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, camera: Camera, prev_camera: Camera,
-                        gb: GBuffer, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
+    def temporal_kernel(offset: int, scene: SceneDevice, prev_scene: SceneDevice, params: PathReuseParams,
+                        camera: Camera, prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer, prev_reservoirs: wp.array(dtype=PathReservoir),
                         reservoirs: wp.array(dtype=PathReservoir), reservoirs_out: wp.array(dtype=PathReservoir),
                         expected: wp.array(dtype=wp.vec3), shifts: wp.array(dtype=PassCounts),
                         events: wp.array(dtype=EventCounts)):
         pixel = wp.tid() + offset
-        r, n, ev, L = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
+        r, n, ev, L = temporal_reuse(scene, prev_scene, params, camera, prev_camera, prev_gb, prev_reservoirs,
+                                     reservoirs[pixel],
                                      load_shading(scene, gb, pixel), pixel)
         reservoirs_out[pixel] = r
         if params.expected_out != 0:
@@ -112,7 +117,8 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
     initial = make_initial_reservoir(m_per_event)
 
     @wp.kernel(module=module or KERNEL_MODULE)
-    def trace_temporal_kernel(offset: int, scene: SceneDevice, params: PathReuseParams, temporal: int,
+    def trace_temporal_kernel(offset: int, scene: SceneDevice, prev_scene: SceneDevice, params: PathReuseParams,
+                              temporal: int,
                               camera: Camera, prev_camera: Camera, gb: GBuffer, prev_gb: GBuffer,
                               prev_reservoirs: wp.array(dtype=PathReservoir), emission: wp.array(dtype=wp.vec3),
                               primary_weight: wp.array(dtype=float), reservoirs: wp.array(dtype=PathReservoir),
@@ -125,7 +131,8 @@ def make_trace_temporal_kernel(shift=SHIFT_INLINED, drop_failed: bool = False, m
         n = wp.vec4i(0)
         L = sample_output(c)
         if temporal != 0:
-            c, n, ev_t, L = temporal_reuse(scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c, sc, pixel)
+            c, n, ev_t, L = temporal_reuse(scene, prev_scene, params, camera, prev_camera, prev_gb, prev_reservoirs, c,
+                                           sc, pixel)
             ev = ev + ev_t
         reservoirs[pixel] = c
         if params.expected_out != 0:  # the last pass (no spatial reuse): its expected output

@@ -128,7 +128,6 @@ MMIS_BASELINE = {"shift": "reconnection", "prefix.temporal": False, "suffix.temp
 
 class SuffixReSTIR(PathReuseIntegrator):
     name = "suffix-restir"
-    STATIC_SCENE_TEMPORAL = ("prefix.temporal", "suffix.temporal")
     STAGES = ("gbuffer", "di.initial_temporal", "di.initial", "di.visibility", "di.temporal", "di.spatial", "di.shade",
               "prefix", "search", "suffix", "suffix_spatial", "gather")
     KERNELS = (primary_hits_kernel, prefix_kernel, boxes_kernel, grid_keys_kernel, grid_order_kernel, suffix_kernel,
@@ -142,6 +141,14 @@ class SuffixReSTIR(PathReuseIntegrator):
     RESERVOIRS = "suffixes"
     # No third suffix buffer: the suffix stage reads the history and writes the other buffer, so
     # the spatial rounds ping-pong between that one and the history's, which is free by then.
+
+    @staticmethod
+    def motion_refusal(settings) -> str | None:
+        on = [key for key in ("prefix.temporal", "suffix.temporal") if settings.get(key)]
+        if not on:
+            return None
+        return (f"suffix-restir's temporal reuse ({', '.join(on)}) does not yet trace its history in the previous "
+                f"frame's scene, so it would be biased where things move: --set {'=false --set '.join(on)}=false")
 
     @staticmethod
     def check_settings(settings: SuffixSettings) -> None:

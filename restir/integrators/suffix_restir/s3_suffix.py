@@ -119,7 +119,8 @@ def make_suffix_kernel(mutation: str = "none"):
         Mq = cap_history(r.M, params.suffix_cap, 1.0)
         key = rng_key(params.pt.seed, params.pt.frame, wp.uint32(STAGE_SR_SUFFIX_TEMPORAL), wp.uint32(pixel))
         base = wp.uint32(params.pt.sample) * wp.uint32(PT_TEMPORAL_DIMS_PER_SAMPLE)
-        st = temporal_pair(scene, c, dc, r, Mq, dq, rng_uniform(key, base), rng_uniform(key, base + wp.uint32(1)))
+        st = temporal_pair(scene, scene, c, dc, r, Mq, dq, rng_uniform(key, base),
+                           rng_uniform(key, base + wp.uint32(1)))
         shifts[pixel] = packed_counts(st.tl.counts)
         reservoirs[pixel] = store(st.chosen, ris_finalize(st.s, 1.0))
         ev = stage_events(st.s, st.tl.failed, st.tl.rays)
