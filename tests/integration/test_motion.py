@@ -47,15 +47,16 @@ def scene(kind):
     return motion_scene(kind)
 
 
-def runs(kind, method, spp, seed0, camera="none", settings=None, allow_mutation=False):
-    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=2,
+def runs(kind, method, spp, seed0, camera="none", settings=None, allow_mutation=False, depth=2):
+    """64 independent runs, each its 8 frames side by side (direct light alone unless `depth`)."""
+    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=depth,
                               camera_motion=camera, camera_speed=3.0, settings=settings or {})
     return IndependentRuns(scene(kind), cfg, RUNS, seed0, allow_mutation=allow_mutation, per_frame=True)
 
 
 @functools.lru_cache(maxsize=None)
-def reference(kind, camera="none"):
-    return runs(kind, "pt", 16, 500_000, camera)
+def reference(kind, camera="none", depth=2):
+    return runs(kind, "pt", 16, 500_000, camera, depth=depth)
 
 
 @pytest.mark.parametrize("kind,camera", [(k, "none") for k in MOTION_KINDS] + [("all", "orbit")])
@@ -96,23 +97,12 @@ def test_the_harness_refuses_the_biased_switch():
 PT_DEPTH = 3  # one indirect bounce: the replayed paths cross the moving objects and lights
 
 
-def pt_runs(kind, method, spp, seed0, camera="none", settings=None, allow_mutation=False):
-    cfg = restir.RenderConfig(method=method, spp=spp, frames=FRAMES, width=SIZE, height=SIZE, max_depth=PT_DEPTH,
-                              camera_motion=camera, camera_speed=3.0, settings=settings or {})
-    return IndependentRuns(scene(kind), cfg, RUNS, seed0, allow_mutation=allow_mutation, per_frame=True)
-
-
-@functools.lru_cache(maxsize=None)
-def pt_reference(kind, camera="none"):
-    return pt_runs(kind, "pt", 16, 500_000, camera)
-
-
 @pytest.mark.parametrize("kind,camera", [(k, "none") for k in MOTION_KINDS] + [("all", "orbit")])
 def test_restir_pt_with_the_replay_shift_under_motion_matches_the_path_tracer(kind, camera):
     """ReSTIR PT's defaults but the replay shift, max_depth 3, 4 spp a frame: the history's path
     and the current one each replayed in the other frame's scene."""
-    pt = pt_runs(kind, "restir-pt", 4, 10_000, camera, {"shift": "replay"})
-    ref = pt_reference(kind, camera)
+    pt = runs(kind, "restir-pt", 4, 10_000, camera, {"shift": "replay"}, depth=PT_DEPTH)
+    ref = reference(kind, camera, PT_DEPTH)
     rep = check(pt, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
     print(kind, camera, f"MDB {rep.mdb:.4f}", pt.counters)
     assert rep.mdb < MAX_MDB
@@ -122,9 +112,9 @@ def test_restir_pt_with_the_replay_shift_under_motion_matches_the_path_tracer(ki
 def test_restir_pt_history_replayed_in_the_current_scene_is_detected(kind):
     """temporal.previous_scene=false at 1 spp a frame: the current sample replayed in the current
     scene for its density in the previous domain. Detected at tile level."""
-    pt = pt_runs(kind, "restir-pt", 1, 10_000, settings={"shift": "replay", "temporal.previous_scene": False},
-                 allow_mutation=True)
-    ref = pt_reference(kind)
+    pt = runs(kind, "restir-pt", 1, 10_000, settings={"shift": "replay", "temporal.previous_scene": False},
+              allow_mutation=True, depth=PT_DEPTH)
+    ref = reference(kind, "none", PT_DEPTH)
     rep = compare(pt, ref.image, ref.batch_variance_of_mean, other=ref, tile=8)
     worst = max(float(np.abs(r.tile_z).max()) / r.tile_crit for r in rep.reports)
     print(kind, f"max tile |z| / threshold {worst:.2f}")
