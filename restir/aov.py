@@ -51,9 +51,11 @@ def aov_kernel(offset: int, scene: SceneDevice, camera: Camera, seed: wp.uint32,
 
 
 def compute_aovs(integrator, names, frames: int) -> dict:
-    """{name: (H, W, 3) float32} for the integrator's scene and camera (frame 0's pose)."""
+    """{name: (H, W, 3) float32} for the integrator's scene and camera (frame 0's pose; an
+    animated scene too is set to its frame 0, so that geometry and camera agree)."""
     from .parallel import launch_pixels
 
+    integrator.dscene.set_frame(0)
     n = integrator.num_pixels
     out = {k: wp.zeros(n, dtype=wp.vec3, device=integrator.device) for k in AOVS}
     samples = max(1, min(AOV_SAMPLES, frames))  # frames: the camera samples to average (one per frame)

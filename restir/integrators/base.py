@@ -119,6 +119,15 @@ class Integrator:
         pose = camera_pose(host.camera.to_world, host.bounds(), motion, self.settings.camera_speed, frame)
         return self.dscene.camera_at(pose)
 
+    def history_scene(self):
+        """The scene a temporal pass evaluates the history's domain in: the previous sample's
+        (`prev_scene`, which a method with temporal reuse keeps; the same as this one's unless the
+        scene moved between them), or with temporal.previous_scene off (a biased switch), this one."""
+        prev = getattr(self, "prev_scene", None)
+        if prev is None or not getattr(self.settings, "temporal_previous_scene", True):
+            return self.dscene.scene
+        return prev
+
     def buffer(self, name: str, dtype, shape=None):
         a = wp.zeros(shape or self.num_pixels, dtype=dtype, device=self.device)
         self.buffers.add(name, a)

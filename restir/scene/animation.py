@@ -275,17 +275,10 @@ def posed_delta_light(d, m, e: float):
     return d
 
 
-def moving_objects(scene, frame: int) -> set:
-    """The objects with triangles that the animation gives a transform at `frame`."""
-    if scene.animation is None:
-        return set()
-    return {n for n, (m, _) in scene.animation.state(frame).items() if m is not None and n in scene.objects}
-
-
-def moving_ranges(scene, frame: int) -> list:
-    """The triangle ranges [lo, hi) of moving_objects (what the ray tracer refits; the rest of the
-    scene keeps its structure)."""
-    return sorted(scene.objects[n] for n in moving_objects(scene, frame))
+def moving_objects(scene, state: dict) -> set:
+    """The objects with triangles that an animation state (Animation.state) gives a transform: what
+    the ray tracer refits, the rest of the scene keeping its structure."""
+    return {n for n, (m, _) in state.items() if m is not None and n in scene.objects}
 
 
 def refuse_for_one_reference(scene, what: str) -> None:

@@ -18,7 +18,7 @@ from ..device.types import (DELTA_DIRECTIONAL, DELTA_POINT, DELTA_SPOT, ENV_CONS
                             MAT_CONDUCTOR, MAT_DIELECTRIC, MAT_DIFFUSE, MAT_PLASTIC, MAT_ROUGHCONDUCTOR, MAT_ROUGHPLASTIC,
                             MAT_ROUGHDIELECTRIC, MAT_THINDIELECTRIC, MICROFACET_BECKMANN, MICROFACET_GGX)
 from .light_tables import alias_table, cdf_1d, env_tables
-from .animation import moving_objects, moving_ranges, posed_delta_light, posed_object, posed_scene
+from .animation import moving_objects, posed_delta_light, posed_object, posed_scene
 from .scene import TEXTURED_PARAMETERS, Scene
 from .transforms import transform_points
 
@@ -83,9 +83,11 @@ def bump_struct(b) -> Bump:
 
 
 def _new_slot() -> dict:
-    """One frame's device data: its arrays, BVH, Embree scene, the frame and the objects moved then."""
-    return {"arrays": [], "mesh": None, "embree": None, "frame": None, "moved": set(), "normals": None,
-            "tangents": None, "tri_emission": None, "tri_light_pdf": None}
+    """One frame's device data: its per-triangle arrays (kept from frame to frame, written where
+    things move), its light tables (made each frame), BVH, Embree scene, the frame and the objects
+    moved then."""
+    return {"arrays": [], "tables": [], "mesh": None, "embree": None, "frame": None, "moved": set(),
+            "normals": None, "tangents": None, "tri_emission": None, "tri_light_pdf": None}
 
 
 class DeviceScene:
@@ -141,7 +143,7 @@ class DeviceScene:
         self._lights(s, posed, self._slots[0])
         if sc.animation is not None:
             self._slots[0]["frame"] = 0
-            self._slots[0]["moved"] = moving_objects(sc, 0)
+            self._slots[0]["moved"] = moving_objects(sc, sc.animation.state(0))
 
         s.env_kind = int({"none": ENV_NONE, "constant": ENV_CONSTANT, "envmap": ENV_MAP}[sc.env_kind])
         s.env_radiance = wp.vec3(*sc.env_radiance)
@@ -166,9 +168,9 @@ class DeviceScene:
         s.textures, s.tex_pixels = self._textures(sc.textures)
         return s
 
-    def _slot_arr(self, slot: dict, data, dtype):
+    def _slot_arr(self, slot: dict, data, dtype, kind: str = "arrays"):
         a = wp.array(data, dtype=dtype, device=self.device)
-        slot["arrays"].append(a)
+        slot[kind].append(a)
         return a
 
     def _geometry(self, s: SceneDevice, sc: Scene, slot: dict) -> None:
@@ -192,7 +194,8 @@ class DeviceScene:
             from ..embree import EmbreeScene, library
 
             if library() is not None:
-                slot["embree"] = EmbreeScene(sc.positions, moving_ranges(self.host, self.frame))
+                moving = moving_objects(self.host, self.host.animation.state(self.frame)) if self.animated else ()
+                slot["embree"] = EmbreeScene(sc.positions, sorted(self.host.objects[n] for n in moving))
             elif self.tracer == "embree":
                 raise RuntimeError("Embree was requested but is not available (pip install embreex)")
         elif self.tracer == "embree":
@@ -248,15 +251,14 @@ class DeviceScene:
         else:
             self._write_at(slot["tri_light_pdf"], E, pdf, float)
         s.tri_light_pdf = slot["tri_light_pdf"]
-        slot["arrays"] = [a for a in slot["arrays"] if a is s.tri_emission or a is s.tri_light_pdf
-                          or a is slot["normals"] or a is slot["tangents"]]
-        s.light_tri = self._slot_arr(slot, entries if len(entries) else np.zeros(1, np.int32), wp.int32)
-        s.light_prob = self._slot_arr(slot, prob, float)
-        s.light_alias = self._slot_arr(slot, alias, wp.int32)
+        slot["tables"] = []  # the slot's last frame's tables: no struct in use reads them any more
+        s.light_tri = self._slot_arr(slot, entries if len(entries) else np.zeros(1, np.int32), wp.int32, "tables")
+        s.light_prob = self._slot_arr(slot, prob, float, "tables")
+        s.light_alias = self._slot_arr(slot, alias, wp.int32, "tables")
         s.num_tri_lights = int(len(lights))
         s.delta_lights = self._slot_arr(slot, [delta_light_struct(d) for d in deltas_of] or [DeltaLight()],
-                                        DeltaLight)
-        s.delta_light_pmf = self._slot_arr(slot, delta_pmf, float)
+                                        DeltaLight, "tables")
+        s.delta_light_pmf = self._slot_arr(slot, delta_pmf, float, "tables")
         s.num_delta_lights = int(len(deltas))
         self._has_lights = bool(len(entries))
 
@@ -285,8 +287,9 @@ class DeviceScene:
         for name in ("tri_emission", "light_tri", "light_prob", "light_alias", "num_tri_lights", "tri_light_pdf",
                      "delta_lights", "delta_light_pmf", "num_delta_lights", "env_select_prob"):
             setattr(s, name, getattr(self.scene, name))
-        emitters = np.repeat(np.any(self.host.tri_emission > 0, axis=1), 3)
-        pts = np.where(emitters[:, None], self.scene.positions.numpy(), prev.positions.numpy())
+        emitters = np.zeros(self.host.num_triangles, bool)
+        emitters[self._emitters] = True
+        pts = np.where(np.repeat(emitters, 3)[:, None], self.scene.positions.numpy(), prev.positions.numpy())
         s.positions = wp.array(pts, dtype=wp.vec3, device=self.device)
         self._mutant_positions = s.positions  # kept alive while the struct is in use
         return s
@@ -315,7 +318,7 @@ class DeviceScene:
         self.frame = frame
         host = self.host
         state = host.animation.state(frame)
-        moving = {n for n, (m, _) in state.items() if m is not None and n in host.objects}  # moving_objects
+        moving = moving_objects(host, state)
         if slot["frame"] is None or not self._update_geometry(s, slot, state, moving | slot["moved"]):
             posed = posed_scene(host, frame)
             self._geometry(s, posed, slot)
@@ -456,5 +459,5 @@ class DeviceScene:
         """Device bytes of the scene's arrays (both frames' geometry and lights of an animated scene)."""
         slots = self._slots if self.animated else self._slots[:1]
         return (sum(a.capacity for a in self._arrays)
-                + sum(a.capacity for sl in slots for a in sl["arrays"])
+                + sum(a.capacity for sl in slots for a in sl["arrays"] + sl["tables"])
                 + sum(sl["mesh"].points.capacity + sl["mesh"].indices.capacity for sl in slots if sl["mesh"] is not None))

@@ -23,8 +23,9 @@ def reproject(camera: Camera, prev_camera: Camera, pixel: int, p: wp.vec3, p_pre
     """The previous frame's pixel of `pixel`, whose primary hit this frame is p and was p_prev
     the frame before (the same point of its surface before that surface moved): the pixel moved by
     the point's motion on screen (p_prev under the previous camera less p under this one);
-    NO_PIXEL when p_prev was behind that camera or the moved pixel is off screen. Not the pixel whose square holds p under the previous camera: the primary ray's
-    filter offset reaches into the neighbouring pixels (a tent or Gaussian filter), so a pixel's
+    NO_PIXEL when p_prev was behind that camera or the moved pixel is off screen. Not the pixel
+    whose square holds p under the previous camera: the primary ray's filter offset reaches into
+    the neighbouring pixels (a tent or Gaussian filter), so a pixel's
     history would come from a neighbour in a third of the frames even under a still camera, and
     the samples would wander between pixels, frame after frame: an error correlated between
     neighbours that the denoiser keeps (docs/guide/when_restir_pays.md#what-the-denoiser-keeps-correlated-error)."""

@@ -185,14 +185,6 @@ class PathReuseIntegrator(Integrator):
         self.prev_scene = self.dscene.scene
         return L
 
-    def history_scene(self):
-        """The scene the history's domain is traced in: the previous sample's (the same as this
-        one's unless the scene moved between them), or with temporal.previous_scene off (where the
-        method has it), this one."""
-        if self.prev_scene is None or not getattr(self.settings, "temporal_previous_scene", True):
-            return self.dscene.scene
-        return self.prev_scene
-
     def resample_sample(self, frame: int, sample: int, direct):
         """The method's passes for one sample after the primary hits; the sample's radiance (a
         device array, one vec3 per pixel)."""

@@ -30,11 +30,10 @@ MUTATIONS = Mutations((initial_temporal_kernel, spatial_kernel), {
     "skip_zero_canonical": lambda: (make_initial_temporal_kernel("skip_zero_canonical"),                    # A1
                                     make_spatial_kernel(skip_zero_canonical=True)),
     "temporal_overweight": lambda: (make_initial_temporal_kernel("overweight_history"), spatial_kernel),  # feedback
-    # under scene motion: the history's domain evaluated in the current scene; the motion vector
-    # from the camera alone; the previous frame's lights replaced by the current ones (a host-side
-    # choice of the previous scene: DeviceScene.with_current_lights)
+    # under scene motion: the history's domain evaluated in the current scene; the previous frame's
+    # lights replaced by the current ones (a host-side choice of the previous scene:
+    # DeviceScene.with_current_lights)
     "current_scene_history": lambda: (make_initial_temporal_kernel("current_scene_history"), spatial_kernel),
-    "camera_motion_vectors": lambda: (make_initial_temporal_kernel("camera_motion_vectors"), spatial_kernel),
     "previous_lights_dropped": None,
     "spatial_in_place": None,        # the spatial pass writes its own input (race, R2)
     "bsdf_unshadowed_reuse": None,   # lets check_settings accept a biased combination
@@ -161,15 +160,12 @@ class ReSTIRDI(Integrator):
                            self.primary_weight, self.emission)
 
     def history_scene(self):
-        """The scene the history's domain is evaluated in: the previous sample's (the same as this
-        one's unless the scene moved between them), or with temporal.previous_scene off, this one;
-        the mutation previous_lights_dropped: the previous one with this one's lights."""
-        sc = self.dscene.scene
-        if self.prev_scene is None or not self.settings.temporal_previous_scene:
-            return sc
-        if self.settings.debug_mutation == "previous_lights_dropped":
-            return self.dscene.with_current_lights(self.prev_scene)
-        return self.prev_scene
+        """Integrator.history_scene; the mutation previous_lights_dropped: the previous scene with
+        this one's lights."""
+        sc = super().history_scene()
+        if sc is self.prev_scene and self.settings.debug_mutation == "previous_lights_dropped":
+            return self.dscene.with_current_lights(sc)
+        return sc
 
     def resample_and_shade(self, frame: int, sample: int) -> None:
         """Every stage after the primary hits, for one sample: direct light into `sample_L`."""

@@ -46,9 +46,8 @@ HISTORY = wp.constant(1)
 
 # The fault injections of this stage (docs/validation.md#power-checks-the-mutation-table), each
 # compiled into a module of its own: A1; a 1.5x history weight (a feedback loop); and under scene
-# motion, the previous domain evaluated in the current scene, and a motion vector from the camera
-# alone.
-FAULTS = ("skip_zero_canonical", "overweight_history", "current_scene_history", "camera_motion_vectors")
+# motion, the previous domain evaluated in the current scene.
+FAULTS = ("skip_zero_canonical", "overweight_history", "current_scene_history")
 
 
 def _mutant_module(faults: tuple):
@@ -69,7 +68,6 @@ def make_temporal_reuse(*faults: str):
     skip_zero_canonical = "skip_zero_canonical" in faults
     overweight_history = "overweight_history" in faults
     current_scene_history = "current_scene_history" in faults
-    camera_motion_vectors = "camera_motion_vectors" in faults
 
     @wp.func(module=_mutant_module(faults))
     def temporal_reuse(scene: SceneDevice, prev_scene: SceneDevice, params: DIParams, camera: Camera,
@@ -79,10 +77,7 @@ def make_temporal_reuse(*faults: str):
         if sc.valid == 0:
             return c, none
         # ---- the temporal technique: where this hit was seen last frame (geometry only)
-        if wp.static(camera_motion_vectors):
-            nq = temporal_neighbor(prev_scene, scene, camera, prev_camera, prev_gb, sc, pixel)
-        else:
-            nq = temporal_neighbor(prev_scene, prev_scene, camera, prev_camera, prev_gb, sc, pixel)
+        nq = temporal_neighbor(prev_scene, prev_scene, camera, prev_camera, prev_gb, sc, pixel)
         if nq.pixel == NO_PIXEL:
             return c, none
         q = nq.pixel
@@ -134,8 +129,8 @@ def temporal_kernel(offset: int, scene: SceneDevice, prev_scene: SceneDevice, pa
                     reservoirs: wp.array(dtype=DIReservoir), reservoirs_out: wp.array(dtype=DIReservoir),
                     events: wp.array(dtype=EventCounts)):
     pixel = wp.tid() + offset
-    r, ev = temporal_reuse(scene, prev_scene, params, camera, prev_camera, prev_gb, prev_reservoirs, reservoirs[pixel],
-                           load_shading(scene, gb, pixel), pixel)
+    r, ev = temporal_reuse(scene, prev_scene, params, camera, prev_camera, prev_gb, prev_reservoirs,
+                           reservoirs[pixel], load_shading(scene, gb, pixel), pixel)
     reservoirs_out[pixel] = r
     events[pixel] = packed_events(ev)
 

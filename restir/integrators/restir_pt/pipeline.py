@@ -215,8 +215,7 @@ class ReSTIRPT(PathReuseIntegrator):
             prev_camera = self.prev_camera or self.dscene.camera  # unread without temporal reuse
             self.run_stage("trace_temporal", trace_temporal,
                            [sc, self.history_scene(), p, int(temporal), self.current_camera, prev_camera, gb.current,
-                            gb.previous,
-                            res.previous, self.emission, self.primary_weight],
+                            gb.previous, res.previous, self.emission, self.primary_weight],
                            [res.current, self.direct_nee, self.expected, self.shift_events])
             if temporal:
                 self.count_shifts("temporal")

@@ -7,8 +7,9 @@ The previous domain is the previous primary hit seen by the previous camera, in 
 frame's scene (`prev_scene`: the current one when nothing moved), where the current sample is
 replayed for its density there. On an animated scene only the replay shift is accepted
 (ReSTIR PT's motion_refusal): the others keep a path's suffix after its reconnection vertex as
-cached radiance, which would have to be traced again in each frame's scene. The replay is done inline in this pass (no separate retrace
-pass): the same function runs for both directions with the same seeds, so the two passes of
+cached radiance, which would have to be traced again in each frame's scene. The replay is done
+inline in this pass (no separate retrace pass): the same function runs for both directions with
+the same seeds, so the two passes of
 the official code cannot disagree here by construction.
 
 Two kernels run it. The shipped one, `trace_temporal_kernel`, is stage 1 and this stage fused:
